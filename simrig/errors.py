@@ -1,0 +1,13 @@
+"""simrig's exceptions: each carries a one-line message that names what is wrong and where."""
+
+
+class SimrigError(Exception):
+    """Base class of every error simrig reports to a user (the CLI prints the message alone)."""
+
+
+class DatasetError(SimrigError):
+    """A dataset folder is missing, incomplete, corrupt, or would be overwritten."""
+
+
+class DatasetExistsError(DatasetError):
+    """The output folder already holds a complete dataset and overwriting was not asked for."""

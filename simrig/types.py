@@ -1,0 +1,278 @@
+"""The records every simrig package shares: poses, boxes, cameras, frames, detections, tracks.
+
+Import-light on purpose: numpy and the standard library only (no highway-env, pyrender or pyarrow), so
+that a tracker can be written and tested against these records alone.
+
+Frames and units
+----------------
+* World frame: right-handed, metres, x along the road, y to the left, z up; yaw in radians,
+  counter-clockwise from +x.
+* Ego frame: the same axes attached to the ego vehicle; origin at the centre of its footprint on the road.
+* Camera frame: OpenCV convention (x right, y down, z forward), metres.
+* Time: seconds. 2D boxes: pixels, (x1, y1, x2, y2) with (0, 0) the top-left corner of the image.
+
+Arrays of boxes use the column orders :data:`BOX3D_FIELDS` and :data:`BOX2D_FIELDS`.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+BOX3D_FIELDS: tuple[str, ...] = ("x", "y", "z", "length", "width", "height", "yaw", "vx", "vy")
+"""Column order of an ``(N, 9)`` array of 3D boxes: centre [m], size [m], yaw [rad], velocity [m/s]."""
+
+BOX2D_FIELDS: tuple[str, ...] = ("x1", "y1", "x2", "y2")
+"""Column order of an ``(N, 4)`` array of 2D boxes [px]."""
+
+
+class ActorClass(enum.StrEnum):
+    """Object classes simrig simulates. The string value is what the dataset stores."""
+
+    CAR = "car"
+    TRUCK = "truck"
+    BUS = "bus"
+    MOTORCYCLE = "motorcycle"
+
+
+def _readonly(array: np.ndarray, dtype, shape_tail: tuple[int, ...], name: str) -> np.ndarray:
+    """Copy ``array`` to ``dtype``, check its trailing shape and freeze it."""
+    out = np.array(array, dtype=dtype, copy=True)
+    if out.shape[1:] != shape_tail and shape_tail != ():
+        raise ValueError(f"{name}: expected shape (N, {', '.join(map(str, shape_tail))}), got {out.shape}")
+    out.setflags(write=False)
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class EgoPose:
+    """Pose of the ego vehicle in the world frame.
+
+    x, y, z: origin of the ego frame [m] (centre of the footprint, on the road); yaw [rad] CCW from +x;
+    vx, vy: velocity [m/s] in the world frame.
+    """
+
+    x: float
+    y: float
+    z: float
+    yaw: float
+    vx: float = 0.0
+    vy: float = 0.0
+
+    def world_from_ego(self) -> np.ndarray:
+        """4×4 homogeneous transform taking ego-frame points to the world frame."""
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        return np.array(
+            [[c, -s, 0.0, self.x], [s, c, 0.0, self.y], [0.0, 0.0, 1.0, self.z], [0.0, 0.0, 0.0, 1.0]]
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class Box3D:
+    """A 3D box in the world frame: centre (x, y, z) [m], size (length along yaw, width, height) [m],
+    yaw [rad] CCW from +x, velocity (vx, vy) [m/s]."""
+
+    x: float
+    y: float
+    z: float
+    length: float
+    width: float
+    height: float
+    yaw: float
+    vx: float = 0.0
+    vy: float = 0.0
+
+    def as_array(self) -> np.ndarray:
+        """The box as a ``(9,)`` array in :data:`BOX3D_FIELDS` order."""
+        return np.array([getattr(self, name) for name in BOX3D_FIELDS], dtype=float)
+
+
+@dataclass(frozen=True, slots=True)
+class Box2D:
+    """An axis-aligned pixel box (x1, y1) top-left to (x2, y2) bottom-right [px]."""
+
+    x1: float
+    y1: float
+    x2: float
+    y2: float
+
+    def as_array(self) -> np.ndarray:
+        """The box as a ``(4,)`` array in :data:`BOX2D_FIELDS` order."""
+        return np.array([self.x1, self.y1, self.x2, self.y2], dtype=float)
+
+    @property
+    def area(self) -> float:
+        """Area [px²]; 0 for an empty box."""
+        return max(0.0, self.x2 - self.x1) * max(0.0, self.y2 - self.y1)
+
+
+@dataclass(frozen=True, slots=True)
+class Camera:
+    """A pinhole camera mounted on the ego vehicle.
+
+    Intrinsics: image size ``width`` × ``height`` [px], focal lengths ``fx``, ``fy`` [px], principal point
+    ``cx``, ``cy`` [px] (measured from the top-left corner).
+    Extrinsics: optical centre ``position`` (x, y, z) [m] in the ego frame; orientation as ``yaw`` [rad]
+    (direction of the optical axis, CCW from the ego's +x), ``pitch`` [rad] (positive tilts the axis up) and
+    ``roll`` [rad] about the optical axis. ``near`` [m] is the near clipping distance used both by the
+    analytic projection and the renderer.
+    """
+
+    name: str
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    position: tuple[float, float, float]
+    yaw: float
+    pitch: float = 0.0
+    roll: float = 0.0
+    near: float = 0.1
+
+    @property
+    def intrinsics(self) -> np.ndarray:
+        """3×3 camera matrix K [px]."""
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    @property
+    def horizontal_fov(self) -> float:
+        """Horizontal field of view [rad] for a principal point at the image centre."""
+        return 2.0 * math.atan(self.width / (2.0 * self.fx))
+
+    def ego_from_camera(self) -> np.ndarray:
+        """4×4 transform taking camera-frame points (OpenCV: x right, y down, z forward) to the ego frame."""
+        cy_, sy_ = math.cos(self.yaw), math.sin(self.yaw)
+        cp, sp = math.cos(self.pitch), math.sin(self.pitch)
+        cr, sr = math.cos(self.roll), math.sin(self.roll)
+        # Axes of a level camera looking along ego +x: forward = +x, right = -y, down = -z.
+        level = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+        roll = np.array([[cr, -sr, 0.0], [sr, cr, 0.0], [0.0, 0.0, 1.0]])  # about the camera's z axis
+        pitch = np.array([[cp, 0.0, -sp], [0.0, 1.0, 0.0], [sp, 0.0, cp]])  # about ego y, up is positive
+        yaw = np.array([[cy_, -sy_, 0.0], [sy_, cy_, 0.0], [0.0, 0.0, 1.0]])
+        out = np.eye(4)
+        out[:3, :3] = yaw @ pitch @ level @ roll
+        out[:3, 3] = self.position
+        return out
+
+
+@dataclass(frozen=True, slots=True)
+class Rig:
+    """A named set of cameras on the ego vehicle, in a fixed order."""
+
+    name: str
+    cameras: tuple[Camera, ...]
+
+    def __post_init__(self) -> None:
+        names = [camera.name for camera in self.cameras]
+        if len(set(names)) != len(names):
+            raise ValueError(f"rig {self.name!r}: camera names must be unique, got {names}")
+
+    @property
+    def camera_names(self) -> tuple[str, ...]:
+        return tuple(camera.name for camera in self.cameras)
+
+    def camera(self, name: str) -> Camera:
+        """The camera called ``name``; a ``KeyError`` naming the rig's cameras otherwise."""
+        for camera in self.cameras:
+            if camera.name == name:
+                return camera
+        raise KeyError(f"rig {self.name!r} has no camera {name!r}; cameras: {', '.join(self.camera_names)}")
+
+
+@dataclass(frozen=True, eq=False)
+class CameraGroundTruth:
+    """Exact ground truth of every actor as one camera sees it; arrays aligned with the frame's actors.
+
+    boxes: ``(N, 4)`` pixel boxes (:data:`BOX2D_FIELDS`), NaN where the actor is not in view; the box is
+    the bounding box of the actor's silhouette after clipping to the near plane and to the image.
+    truncation: ``(N,)`` fraction [0, 1] of the unclipped projected box lying outside the image (NaN where
+    not in view). depth: ``(N,)`` camera-frame z of the box centre [m]. in_view: ``(N,)`` bool.
+    """
+
+    boxes: np.ndarray
+    truncation: np.ndarray
+    depth: np.ndarray
+    in_view: np.ndarray
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "boxes", _readonly(self.boxes, float, (4,), "boxes"))
+        for name, dtype in (("truncation", float), ("depth", float), ("in_view", bool)):
+            object.__setattr__(self, name, _readonly(getattr(self, name), dtype, (), name))
+
+
+@dataclass(frozen=True, eq=False)
+class GroundTruthFrame:
+    """Everything true at one time step (never given to a tracker).
+
+    frame: index from 0; timestamp [s]; ego: the ego pose; actor_ids: ``(N,)`` int64 ids, unique and
+    stable for an actor's lifetime; classes: ``(N,)`` class names (:class:`ActorClass` values);
+    boxes: ``(N, 9)`` world-frame boxes in :data:`BOX3D_FIELDS` order; cameras: per camera name, the
+    actors' projections; events: the perturbation events active at this frame (for cause attribution).
+    """
+
+    frame: int
+    timestamp: float
+    ego: EgoPose
+    actor_ids: np.ndarray
+    classes: np.ndarray
+    boxes: np.ndarray
+    cameras: Mapping[str, CameraGroundTruth] = field(default_factory=dict)
+    events: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "actor_ids", _readonly(self.actor_ids, np.int64, (), "actor_ids"))
+        object.__setattr__(self, "classes", _readonly(self.classes, object, (), "classes"))
+        object.__setattr__(self, "boxes", _readonly(self.boxes, float, (len(BOX3D_FIELDS),), "boxes"))
+        n = len(self.actor_ids)
+        if len(self.classes) != n or len(self.boxes) != n:
+            raise ValueError(
+                f"frame {self.frame}: {n} actor ids but {len(self.classes)} classes and {len(self.boxes)} boxes"
+            )
+
+
+@dataclass(frozen=True, eq=False)
+class Detection:
+    """One detection from one camera: pixel ``box``, confidence ``score`` in [0, 1], class ``label``,
+    optionally a monocular 3D estimate ``box3d`` in the world frame and an appearance ``embedding``
+    (unit vector). Carries no ground-truth id."""
+
+    box: Box2D
+    score: float
+    label: ActorClass
+    box3d: Box3D | None = None
+    embedding: np.ndarray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class SensorFrame:
+    """What a tracker sees at one time step: frame index, timestamp [s], the ego pose, the rig, and per
+    camera name the tuple of detections (an empty tuple when a camera reports nothing)."""
+
+    frame: int
+    timestamp: float
+    ego: EgoPose
+    rig: Rig
+    detections: Mapping[str, tuple[Detection, ...]]
+
+
+@dataclass(frozen=True, eq=False)
+class Track:
+    """One output of a tracker at one time step: ``track_id``, class ``label``, confidence ``score``,
+    and either a world-frame ``box3d`` (3D trackers; velocity in the box) or per-camera pixel boxes
+    ``boxes2d`` (2D trackers), or both."""
+
+    track_id: int
+    label: ActorClass
+    score: float
+    box3d: Box3D | None = None
+    boxes2d: Mapping[str, Box2D] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.box3d is None and not self.boxes2d:
+            raise ValueError(f"track {self.track_id}: needs a 3D box or at least one per-camera 2D box")
