@@ -1,0 +1,120 @@
+"""The scenario catalog and loader.
+
+A scenario is a TOML file validated by :class:`scenarios.schema.Scenario`. Catalog entries live next to
+this module (``scenarios/<name>.toml``). A user's file may start from a catalog entry with
+``extends = "name"`` and override only what it changes; tables are merged key by key, other values are
+replaced.
+
+>>> load_scenario("highway_surround6").rig.preset
+'surround6'
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from .schema import Scenario
+
+CATALOG_DIR = Path(__file__).resolve().parent
+DEFAULT_SCENARIO = "highway_surround6"
+_NAMED_MESSAGE = re.compile(r"^([a-z_]+(?:, [a-z_]+)*): (.*)$")
+
+__all__ = ["CATALOG_DIR", "DEFAULT_SCENARIO", "Scenario", "ScenarioError", "catalog", "load_scenario"]
+
+
+class ScenarioError(ValueError):
+    """A scenario cannot be found or is invalid; the message names the file and the key."""
+
+
+def catalog() -> dict[str, Path]:
+    """Catalog entries by name, sorted by name."""
+    return {path.stem: path for path in sorted(CATALOG_DIR.glob("*.toml"))}
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    try:
+        with path.open("rb") as handle:
+            return tomllib.load(handle)
+    except FileNotFoundError:
+        raise ScenarioError(f"scenario file {str(path)!r} does not exist") from None
+    except tomllib.TOMLDecodeError as error:
+        raise ScenarioError(f"scenario file {str(path)!r}: not valid TOML: {error}") from None
+
+
+def _merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
+    """``override`` on top of ``base``: tables merge key by key, everything else is replaced."""
+    out = dict(base)
+    for key, value in override.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+def _resolve(path: Path, chain: tuple[Path, ...]) -> dict[str, Any]:
+    """The raw dict of ``path`` with its ``extends`` chain merged in (parents first)."""
+    if path in chain:
+        cycle = " -> ".join(p.name for p in (*chain, path))
+        raise ScenarioError(f"scenario file {str(path)!r}: 'extends' forms a cycle: {cycle}")
+    raw = _read_toml(path)
+    parent = raw.pop("extends", None)
+    if parent is None:
+        return raw
+    if not isinstance(parent, str):
+        raise ScenarioError(f"scenario file {str(path)!r}: extends: must be a catalog name (a string)")
+    entries = catalog()
+    if parent not in entries:
+        raise ScenarioError(
+            f"scenario file {str(path)!r}: extends: unknown catalog scenario {parent!r}; "
+            f"known: {', '.join(entries)}"
+        )
+    base = _resolve(entries[parent], (*chain, path))
+    base.pop("name", None)  # a derived scenario is named by its own file
+    return _merge(base, raw)
+
+
+def _describe(error: ValidationError) -> str:
+    """One line per pydantic error folded into one line: 'key.path: message'."""
+    parts = []
+    for item in error.errors():
+        key = ".".join(str(part) for part in item["loc"]) or "(top level)"
+        message = item["msg"]
+        if item["type"] == "extra_forbidden":
+            message = "unknown key"
+        elif message.startswith("Value error, "):
+            message = message.removeprefix("Value error, ")
+            named = _NAMED_MESSAGE.match(message)
+            if named:  # a model-level check names its own key: "lanes: only highway-v0 ..."
+                prefix = "" if key == "(top level)" else key + "."
+                key, message = prefix + named.group(1), named.group(2)
+        parts.append(f"{key}: {message}")
+    return "; ".join(parts)
+
+
+def load_scenario(name_or_path: str | Path) -> Scenario:
+    """A validated :class:`Scenario` from a catalog name or a TOML file path.
+
+    Raises :class:`ScenarioError` with a one-line message naming the file and the offending key.
+    """
+    entries = catalog()
+    text = str(name_or_path)
+    if text in entries and not Path(text).suffix:
+        path = entries[text]
+    else:
+        path = Path(text)
+        if path.suffix != ".toml" and not path.exists():
+            raise ScenarioError(
+                f"unknown scenario {text!r}: not a catalog name ({', '.join(entries)}) nor a .toml file"
+            )
+    raw = _resolve(path, ())
+    raw.setdefault("name", path.stem)
+    try:
+        return Scenario.model_validate(raw)
+    except ValidationError as error:
+        raise ScenarioError(f"scenario file {str(path)!r}: {_describe(error)}") from None

@@ -1,0 +1,163 @@
+"""The scenario schema: every key with its unit, validated strictly.
+
+An unknown key, a wrong type or an impossible value is an error; a parameter that does not apply to the
+chosen preset or traffic environment is an error too, never silently ignored.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+TRAFFIC_ENVS = ("highway-v0", "merge-v0", "roundabout-v0", "intersection-v0")
+RIG_PRESETS = ("surround6", "stereo", "ring", "custom")
+ACTOR_CLASSES = ("car", "truck", "bus", "motorcycle")
+
+PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+NonNegativeFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+
+
+class _Strict(BaseModel):
+    """Base model: unknown keys are errors, values are immutable once validated."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=False)
+
+
+def _set_keys(model: BaseModel) -> set[str]:
+    return set(model.model_fields_set)
+
+
+class TrafficConfig(_Strict):
+    """Traffic around the ego vehicle.
+
+    The number of other vehicles is held at ``vehicles`` inside a disc of ``window_radius_m`` around the ego:
+    vehicles leaving the disc are removed, new ones appear between ``spawn_min_distance_m`` and the radius.
+    """
+
+    env: Literal["highway-v0", "merge-v0", "roundabout-v0", "intersection-v0"] = "highway-v0"
+    lanes: Annotated[int, Field(ge=1, le=8)] = 4
+    """[-] lanes of highway-v0 (only valid there: the other maps have a fixed layout)."""
+    vehicles: Annotated[int, Field(ge=0, le=200)] = 40
+    """[-] other vehicles kept inside the window."""
+    window_radius_m: PositiveFloat = 150.0
+    """[m] radius of the window around the ego in which traffic is kept."""
+    spawn_min_distance_m: NonNegativeFloat = 100.0
+    """[m] new vehicles appear at a distance from the ego between this and the radius."""
+    initial_clearance_m: NonNegativeFloat = 12.0
+    """[m] no vehicle is placed closer than this to the ego at the start."""
+    speed_range_mps: tuple[PositiveFloat, PositiveFloat] = (20.0, 30.0)
+    """[m/s] target speeds of other vehicles are drawn uniformly from this range."""
+    ego_speed_mps: PositiveFloat = 25.0
+    """[m/s] target speed of the ego's IDM driver."""
+    simulation_substeps: Annotated[int, Field(ge=1, le=20)] = 1
+    """[-] highway-env integration steps per output frame."""
+    class_mix: dict[Literal["car", "truck", "bus", "motorcycle"], NonNegativeFloat] = Field(
+        default_factory=lambda: {"car": 0.8, "truck": 0.1, "bus": 0.05, "motorcycle": 0.05}
+    )
+    """[-] relative frequency of each class among spawned vehicles (normalised)."""
+
+    @model_validator(mode="after")
+    def _check(self) -> TrafficConfig:
+        if "lanes" in _set_keys(self) and self.env != "highway-v0":
+            raise ValueError(f"lanes: only highway-v0 has a configurable lane count, not {self.env}")
+        if self.spawn_min_distance_m > self.window_radius_m:
+            raise ValueError(
+                f"spawn_min_distance_m: {self.spawn_min_distance_m} m exceeds window_radius_m "
+                f"{self.window_radius_m} m"
+            )
+        low, high = self.speed_range_mps
+        if low > high:
+            raise ValueError(f"speed_range_mps: lower bound {low} exceeds upper bound {high}")
+        if not self.class_mix or sum(self.class_mix.values()) <= 0:
+            raise ValueError("class_mix: needs at least one class with a positive share")
+        return self
+
+
+class CustomCamera(_Strict):
+    """One camera of a ``custom`` rig: pose on the ego [m, deg], horizontal field of view [deg], image [px]."""
+
+    name: Annotated[str, Field(min_length=1)]
+    x_m: FiniteFloat = 0.0
+    y_m: FiniteFloat = 0.0
+    z_m: FiniteFloat = 1.6
+    yaw_deg: FiniteFloat = 0.0
+    pitch_deg: Annotated[float, Field(ge=-89, le=89)] = 0.0
+    hfov_deg: Annotated[float, Field(gt=0, lt=179)] = 60.0
+    width_px: Annotated[int, Field(ge=16, le=8192)] = 1600
+    height_px: Annotated[int, Field(ge=16, le=8192)] = 900
+
+
+_PRESET_KEYS = {
+    "surround6": {"overlap_deg", "image_width_px", "image_height_px", "mount_height_m"},
+    "stereo": {"baseline_m", "hfov_deg", "image_width_px", "image_height_px", "mount_height_m"},
+    "ring": {"cameras_count", "overlap_deg", "image_width_px", "image_height_px", "mount_height_m"},
+    "custom": {"cameras"},
+}
+
+
+class RigConfig(_Strict):
+    """The camera rig. ``preset`` picks the layout; the other keys tune it and must fit the preset:
+
+    * ``surround6`` — nuScenes-like ring of six (front, front-left/right at ±55°, back-left/right at
+      ±110°, back at 180°); neighbours overlap by ``overlap_deg``, the back camera is wider.
+    * ``stereo`` — KITTI-like pair ``left``/``right`` facing forward, ``baseline_m`` apart.
+    * ``ring`` — ``cameras_count`` cameras evenly spaced; FOV = 360°/N + ``overlap_deg``.
+    * ``custom`` — an explicit list of ``cameras``.
+    """
+
+    preset: Literal["surround6", "stereo", "ring", "custom"] = "surround6"
+    overlap_deg: Annotated[float, Field(ge=0, le=60)] = 10.0
+    """[deg] angular overlap between neighbouring cameras (surround6, ring)."""
+    cameras_count: Annotated[int, Field(ge=2, le=16)] = 6
+    """[-] cameras in a ring."""
+    baseline_m: PositiveFloat = 0.54
+    """[m] distance between the stereo pair's optical centres."""
+    hfov_deg: Annotated[float, Field(gt=0, lt=179)] = 81.2
+    """[deg] horizontal field of view of each stereo camera (KITTI: 1242 px at f = 721.5 px)."""
+    image_width_px: Annotated[int, Field(ge=16, le=8192)] | None = None
+    """[px] image width; preset default when omitted (1600 surround/ring, 1242 stereo)."""
+    image_height_px: Annotated[int, Field(ge=16, le=8192)] | None = None
+    """[px] image height; preset default when omitted (900 surround/ring, 375 stereo)."""
+    mount_height_m: PositiveFloat = 1.6
+    """[m] height of the optical centres above the road."""
+    cameras: tuple[CustomCamera, ...] = ()
+
+    @model_validator(mode="after")
+    def _check(self) -> RigConfig:
+        allowed = _PRESET_KEYS[self.preset] | {"preset"}
+        foreign = sorted(_set_keys(self) - allowed)
+        if foreign:
+            raise ValueError(f"{', '.join(foreign)}: not a setting of the {self.preset!r} preset")
+        if self.preset == "custom":
+            if not self.cameras:
+                raise ValueError("cameras: a custom rig needs at least one camera")
+            names = [camera.name for camera in self.cameras]
+            if len(set(names)) != len(names):
+                raise ValueError(f"cameras: names must be unique, got {names}")
+        if self.preset == "ring" and 360.0 / self.cameras_count + self.overlap_deg >= 179.0:
+            raise ValueError(
+                f"overlap_deg: {self.cameras_count} cameras with {self.overlap_deg}° overlap need a field of "
+                "view of 179° or more, which a pinhole camera cannot have"
+            )
+        return self
+
+
+class Scenario(_Strict):
+    """A named, fully resolved scenario: traffic, rig and timing."""
+
+    name: Annotated[str, Field(min_length=1)]
+    description: str = ""
+    frame_rate_hz: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False)] = 10.0
+    """[Hz] frames per second of ground truth and sensor output."""
+    frames: Annotated[int, Field(ge=1, le=1_000_000)] = 200
+    """[-] default number of frames to generate (``--frames`` overrides it)."""
+    traffic: TrafficConfig = Field(default_factory=TrafficConfig)
+    rig: RigConfig = Field(default_factory=RigConfig)
+
+    @property
+    def frame_period_s(self) -> float:
+        """[s] time between two frames."""
+        return 1.0 / self.frame_rate_hz
+
