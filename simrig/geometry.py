@@ -1,0 +1,203 @@
+"""Vectorised geometry: box corners, frame transforms, and projection of 3D boxes into cameras.
+
+Projection clips each box face as a polygon, first against the camera's near plane in 3D, then against
+the image rectangle in 2D (Sutherland–Hodgman, one half-space at a time, all polygons at once). Corners
+behind the camera are never projected, so a box straddling the near plane is cut, not mirrored. The
+2D box is the bounding box of the clipped silhouette (the union of the clipped faces), which is what an
+annotator would draw around the visible part of the object inside the image.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .types import EgoPose, Rig
+
+# Corners of a unit box, (x forward, y left, z up) as multiples of (length, width, height) around the centre.
+# Bottom face 0-3 counter-clockwise seen from above starting front-left, top face 4-7 above them.
+_UNIT_CORNERS = np.array(
+    [
+        [0.5, 0.5, -0.5],
+        [-0.5, 0.5, -0.5],
+        [-0.5, -0.5, -0.5],
+        [0.5, -0.5, -0.5],
+        [0.5, 0.5, 0.5],
+        [-0.5, 0.5, 0.5],
+        [-0.5, -0.5, 0.5],
+        [0.5, -0.5, 0.5],
+    ]
+)
+BOX_FACES = np.array([[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]])
+"""Corner indices of the six faces, each an ordered (convex) quadrilateral."""
+
+
+def box_corners(boxes: np.ndarray) -> np.ndarray:
+    """Corners of 3D boxes.
+
+    boxes: ``(N, ≥7)`` array with columns x, y, z [m] (centre), length, width, height [m], yaw [rad] —
+    the first seven of :data:`simrig.types.BOX3D_FIELDS`. Returns ``(N, 8, 3)`` corners in the boxes' frame,
+    ordered as :data:`BOX_FACES` expects.
+
+    >>> box_corners(np.array([[0, 0, 1, 4, 2, 2, 0]]))[0, 0].tolist()
+    [2.0, 1.0, 0.0]
+    """
+    boxes = np.asarray(boxes, dtype=float)
+    local = _UNIT_CORNERS[None, :, :] * boxes[:, None, 3:6]
+    cos, sin = np.cos(boxes[:, 6])[:, None], np.sin(boxes[:, 6])[:, None]
+    x = cos * local[..., 0] - sin * local[..., 1] + boxes[:, None, 0]
+    y = sin * local[..., 0] + cos * local[..., 1] + boxes[:, None, 1]
+    z = local[..., 2] + boxes[:, None, 2]
+    return np.stack([x, y, z], axis=-1)
+
+
+def transform_points(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Apply 4×4 transforms to points: ``matrix`` (..., 4, 4) broadcast against ``points`` (..., 3)."""
+    return np.einsum("...ij,...j->...i", matrix[..., :3, :3], points) + matrix[..., :3, 3]
+
+
+def camera_from_world(rig: Rig, ego: EgoPose) -> np.ndarray:
+    """``(C, 4, 4)`` transforms taking world points to each camera's OpenCV frame, in rig order."""
+    world_from_ego = ego.world_from_ego()
+    world_from_camera = np.stack([world_from_ego @ camera.ego_from_camera() for camera in rig.cameras])
+    return np.linalg.inv(world_from_camera)
+
+
+def clip_convex_polygons(
+    points: np.ndarray, count: np.ndarray, normals: np.ndarray, offsets: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Clip convex polygons to the half-spaces ``normal · p + offset ≥ 0`` (one per polygon).
+
+    points: ``(M, K, D)`` vertices in order, the first ``count[m]`` valid; normals ``(M, D)``; offsets ``(M,)``.
+    Returns ``(M, K + 1, D)`` vertices and the new ``(M,)`` counts (a convex polygon gains at most one vertex).
+    """
+    m, k, _ = points.shape
+    index = np.arange(k)
+    valid = index[None, :] < count[:, None]
+    following = (index[None, :] + 1) % np.maximum(count, 1)[:, None]
+    distance = np.einsum("mkd,md->mk", points, normals) + offsets[:, None]
+    distance_next = np.take_along_axis(distance, following, axis=1)
+    inside, inside_next = distance >= 0.0, distance_next >= 0.0
+    crossing = valid & (inside != inside_next)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(crossing, distance / (distance - distance_next), 0.0)
+    nxt = np.take_along_axis(points, following[..., None], axis=1)
+    intersection = points + t[..., None] * (nxt - points)
+    candidates = np.stack([points, intersection], axis=2).reshape(m, 2 * k, -1)
+    keep = np.stack([valid & inside, crossing], axis=2).reshape(m, 2 * k)
+    order = np.argsort(~keep, axis=1, kind="stable")
+    width = min(2 * k, k + 1)
+    kept = np.take_along_axis(candidates, order[:, :width, None], axis=1)
+    return kept, keep.sum(axis=1)
+
+
+def _masked_bounds(points: np.ndarray, valid: np.ndarray, axis: int) -> tuple[np.ndarray, np.ndarray]:
+    low = np.where(valid[..., None], points, np.inf).min(axis=axis)
+    high = np.where(valid[..., None], points, -np.inf).max(axis=axis)
+    return low, high
+
+
+@dataclass(frozen=True, eq=False)
+class Projection:
+    """Boxes projected into every camera of a rig; arrays are ``(C, N, ...)`` in rig order.
+
+    boxes: pixel boxes (x1, y1, x2, y2) of the silhouette clipped to the near plane and the image, NaN
+    where not in view. unclipped: the same before clipping to the image (NaN where wholly behind the near
+    plane). truncation: 1 − area(boxes) / area(unclipped) in [0, 1], NaN where not in view.
+    depth: camera-frame z of each box centre [m]. in_view: some part of the box is in front of the near
+    plane and inside the image, with positive area.
+    """
+
+    boxes: np.ndarray
+    unclipped: np.ndarray
+    truncation: np.ndarray
+    depth: np.ndarray
+    in_view: np.ndarray
+
+
+def _frustum_candidates(centres: np.ndarray, radii: np.ndarray, rig: Rig) -> np.ndarray:
+    """``(C, N)`` mask of boxes whose bounding sphere (camera-frame ``centres`` (C, N, 3), ``radii`` (N,))
+    reaches into each camera's viewing frustum; a conservative pre-test, exact clipping follows."""
+    params = np.array([[cam.fx, cam.fy, cam.cx, cam.cy, cam.width, cam.height, cam.near] for cam in rig.cameras])
+    fx, fy, cx, cy, width, height, near = (params[:, i, None] for i in range(7))
+    x, y, z = centres[..., 0], centres[..., 1], centres[..., 2]
+    margin = -radii[None, :]
+    return (
+        (z - near >= margin)
+        & ((fx * x + cx * z) / np.hypot(fx, cx) >= margin)
+        & ((-fx * x + (width - cx) * z) / np.hypot(fx, width - cx) >= margin)
+        & ((fy * y + cy * z) / np.hypot(fy, cy) >= margin)
+        & ((-fy * y + (height - cy) * z) / np.hypot(fy, height - cy) >= margin)
+    )
+
+
+def _clip_faces_to_image(
+    faces: np.ndarray, cameras: np.ndarray, rig: Rig
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Bounds of camera-frame box faces ``(P, 6, 4, 3)`` seen by camera index ``cameras`` ``(P,)``.
+
+    Returns (low, high) of the silhouette clipped to the near plane and the image, and (low, high) of the
+    silhouette clipped to the near plane only; ``(P, 2)`` pixels each, ±inf where nothing is left.
+    """
+    p = len(faces)
+    polygons = faces.reshape(-1, 4, 3)
+    m = len(polygons)
+    camera_of = np.repeat(cameras, len(BOX_FACES))
+    params = np.array([[cam.fx, cam.fy, cam.cx, cam.cy, cam.width, cam.height, cam.near] for cam in rig.cameras])
+    fx, fy, cx, cy, width, height, near = (params[camera_of, i] for i in range(7))
+    normal = np.zeros((m, 3))
+    normal[:, 2] = 1.0
+    polygons, count = clip_convex_polygons(polygons, np.full(m, 4), normal, -near)  # keep z >= near
+
+    valid = np.arange(polygons.shape[1])[None, :] < count[:, None]
+    z = np.where(valid, polygons[..., 2], 1.0)
+    pixels = np.stack(
+        [fx[:, None] * polygons[..., 0] / z + cx[:, None], fy[:, None] * polygons[..., 1] / z + cy[:, None]],
+        axis=-1,
+    )
+    unclipped = _masked_bounds(pixels.reshape(p, -1, 2), valid.reshape(p, -1), 1)
+
+    zeros, ones = np.zeros(m), np.ones(m)
+    for normal, offset in (
+        (np.stack([ones, zeros], 1), zeros),  # x >= 0
+        (np.stack([-ones, zeros], 1), width),  # x <= width
+        (np.stack([zeros, ones], 1), zeros),  # y >= 0
+        (np.stack([zeros, -ones], 1), height),  # y <= height
+    ):
+        pixels, count = clip_convex_polygons(pixels, count, normal, offset)
+    valid = np.arange(pixels.shape[1])[None, :] < count[:, None]
+    clipped = _masked_bounds(pixels.reshape(p, -1, 2), valid.reshape(p, -1), 1)
+    return (*clipped, *unclipped)
+
+
+def project_boxes(boxes: np.ndarray, rig: Rig, ego: EgoPose) -> Projection:
+    """Project world-frame 3D boxes (``(N, ≥7)``, :data:`~simrig.types.BOX3D_FIELDS` order) into every camera."""
+    boxes = np.asarray(boxes, dtype=float)
+    if boxes.ndim != 2 or boxes.shape[1] < 7:
+        raise ValueError(f"boxes: expected shape (N, 9) in BOX3D_FIELDS order, got {boxes.shape}")
+    n, c = len(boxes), len(rig.cameras)
+    transforms = camera_from_world(rig, ego)  # (C, 4, 4)
+    centres = transform_points(transforms[:, None], boxes[None, :, :3])  # (C, N, 3)
+    radii = 0.5 * np.linalg.norm(boxes[:, 3:6], axis=1)
+    camera_index, box_index = np.nonzero(_frustum_candidates(centres, radii, rig))
+
+    clipped = np.full((c, n, 4), np.nan)
+    unclipped = np.full((c, n, 4), np.nan)
+    if len(camera_index):
+        corners = transform_points(transforms[camera_index, None], box_corners(boxes[box_index]))  # (P, 8, 3)
+        low, high, raw_low, raw_high = _clip_faces_to_image(corners[:, BOX_FACES], camera_index, rig)
+        clipped[camera_index, box_index] = np.concatenate([low, high], axis=-1)
+        unclipped[camera_index, box_index] = np.concatenate([raw_low, raw_high], axis=-1)
+    clipped[~np.isfinite(clipped)] = np.nan
+    unclipped[~np.isfinite(unclipped)] = np.nan
+
+    area = (clipped[..., 2] - clipped[..., 0]) * (clipped[..., 3] - clipped[..., 1])
+    unclipped_area = (unclipped[..., 2] - unclipped[..., 0]) * (unclipped[..., 3] - unclipped[..., 1])
+    in_view = area > 0.0  # False for NaN
+    with np.errstate(invalid="ignore", divide="ignore"):
+        truncation = np.where(in_view, np.clip(1.0 - area / unclipped_area, 0.0, 1.0), np.nan)
+    clipped[~in_view] = np.nan
+    return Projection(
+        boxes=clipped, unclipped=unclipped, truncation=truncation, depth=centres[..., 2], in_view=in_view
+    )
