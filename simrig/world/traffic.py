@@ -1,0 +1,260 @@
+"""highway-env as simrig's traffic source: an IDM-driven ego inside steady traffic, exact 3D ground truth.
+
+What this module adds to highway-env (see ``shared/notes/simulation.md`` for the measured facts):
+
+* The ego drives itself (IDM + MOBIL, like every other vehicle), so no agent action ends an episode. The
+  scenario always runs all its frames: a crash of the ego or the end of highway-env's episode is recorded
+  as an event (``ego_crashed``, ``env_terminated``) and stepping goes on.
+* All traffic is simrig's: highway-env's own vehicles are removed at reset and intersection-v0's spawning
+  is switched off. ``vehicles`` others are kept in a disc of ``window_radius_m`` around the ego: a vehicle
+  leaving the disc is removed (a death), a new one appears on a random lane between
+  ``spawn_min_distance_m`` and the radius (a birth), at least ``SPAWN_CLEARANCE_M`` from every bumper.
+* On highway-v0 the ego is moved ``window_radius_m`` down the road so that the window behind it lies on
+  the road (highway-env places it at the start, behind all traffic).
+* Ids come from a counter (highway-env has none; ``id()`` is reused after removal).
+* highway-env's y axis points right: it is converted here, once, to the world frame
+  (X = x, Y = −y, yaw = −heading, vY = −vy), and nowhere else.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import gymnasium as gym
+import highway_env  # noqa: F401  (registers the environments)
+import numpy as np
+
+from scenarios.schema import TrafficConfig
+
+from ..types import ActorClass, EgoPose
+from .vehicles import VEHICLE_TYPES, SimrigVehicle
+
+SPAWN_CLEARANCE_M = 10.0
+"""[m] minimum bumper-to-bumper distance between a spawned vehicle and any other vehicle."""
+SPAWN_ATTEMPTS = 30
+"""[-] random placements tried per missing vehicle and frame before giving up until the next frame."""
+EGO_CLASS = ActorClass.CAR
+
+_ENV_CONFIG = {
+    "highway-v0": lambda cfg: {"lanes_count": cfg.lanes, "vehicles_count": 0, "controlled_vehicles": 1},
+    "merge-v0": lambda cfg: {},
+    "roundabout-v0": lambda cfg: {},
+    "intersection-v0": lambda cfg: {"spawn_probability": 0.0, "initial_vehicle_count": 0},
+}
+
+
+def _number(value: float) -> int | float:
+    """An int where the value is integral (intersection-v0 uses the frequencies as loop counts)."""
+    return int(value) if float(value).is_integer() else value
+
+
+@dataclass(frozen=True, eq=False)
+class WorldState:
+    """Exact ground truth at one frame, in the world frame.
+
+    frame: index from 0; timestamp [s]; ego: ego pose; actor_ids ``(N,)`` int64; classes ``(N,)`` class
+    names; boxes ``(N, 9)`` in :data:`simrig.types.BOX3D_FIELDS` order; events: what happened in the
+    simulator at this frame, e.g. ``("ego_crashed",)``.
+    """
+
+    frame: int
+    timestamp: float
+    ego: EgoPose
+    actor_ids: np.ndarray
+    classes: np.ndarray
+    boxes: np.ndarray
+    events: tuple[str, ...]
+
+
+class TrafficWorld:
+    """Steps highway-env at the scenario's frame rate and reports exact ground truth per frame.
+
+    ``env_seed`` seeds highway-env (its road and vehicle randomness); ``rng`` drives simrig's own choices
+    (where and which vehicles appear). Both come from the scenario seed (:mod:`simrig.seeding`).
+    """
+
+    def __init__(self, config: TrafficConfig, frame_rate_hz: float, *, env_seed: int, rng: np.random.Generator):
+        self.config = config
+        self.frame_rate_hz = frame_rate_hz
+        self._env_seed = env_seed
+        self._rng = rng
+        env_config = {
+            "observation": {"type": "AttributesObservation", "attributes": ["time"]},
+            "duration": 1e9,
+            "policy_frequency": _number(frame_rate_hz),
+            "simulation_frequency": _number(frame_rate_hz * config.simulation_substeps),
+            **_ENV_CONFIG[config.env](config),
+        }
+        self.env = gym.make(config.env, config=env_config, render_mode=None, disable_env_checker=True)
+        self._classes = [ActorClass(name) for name in config.class_mix]
+        weights = np.array([config.class_mix[name] for name in config.class_mix], dtype=float)
+        self._class_weights = weights / weights.sum()
+        self._next_id = 0
+        self._frame = -1
+        self._terminated_reported = False
+        self.ego: SimrigVehicle | None = None
+
+    # ------------------------------------------------------------------ life cycle
+    def reset(self) -> WorldState:
+        """Start the scenario: a fresh road, the IDM ego placed inside the traffic, the window populated."""
+        self.env.reset(seed=self._env_seed)
+        env = self.env.unwrapped
+        road = env.road
+        old = env.vehicle
+        lane_index = old.lane_index
+        lane = road.network.get_lane(lane_index)
+        position, heading = old.position.copy(), old.heading
+        if self.config.env == "highway-v0":
+            s = self.config.window_radius_m + 10.0
+            position, heading = lane.position(s, 0.0), lane.heading_at(s)
+        ego_type = VEHICLE_TYPES[EGO_CLASS]
+        speed = self.config.ego_speed_mps
+        self.ego = ego_type(
+            road, position, heading=heading, speed=speed, target_lane_index=lane_index, target_speed=speed,
+            route=old.route,
+        )
+        road.vehicles = [self.ego]
+        env.controlled_vehicles = [self.ego]
+        self._lanes = road.network.lanes_list()
+        self._lane_indices = [
+            (start, end, index)
+            for start, ends in road.network.graph.items()
+            for end, lanes in ends.items()
+            for index in range(len(lanes))
+        ]
+        self._nodes = list(road.network.graph)
+        self._next_id = 0
+        self._frame = 0
+        self._terminated_reported = False
+        self._fill(self.config.initial_clearance_m)
+        return self._state(())
+
+    def step(self) -> WorldState:
+        """Advance one frame (1 / frame rate seconds) and keep the traffic window at its density."""
+        if self.ego is None:
+            raise RuntimeError("TrafficWorld.step() called before reset()")
+        was_crashed = self.ego.crashed
+        _, _, terminated, _, _ = self.env.step(None)
+        self._frame += 1
+        events = []
+        if self.ego.crashed and not was_crashed:
+            events.append("ego_crashed")
+        if terminated and not self._terminated_reported:
+            self._terminated_reported = True
+            events.append("env_terminated")
+        self._remove_far()
+        self._fill(self.config.spawn_min_distance_m)
+        return self._state(tuple(events))
+
+    def close(self) -> None:
+        self.env.close()
+
+    # ------------------------------------------------------------------ traffic window
+    def _others(self) -> list:
+        return [vehicle for vehicle in self.env.unwrapped.road.vehicles if vehicle is not self.ego]
+
+    def _remove_far(self) -> None:
+        road = self.env.unwrapped.road
+        radius = self.config.window_radius_m
+        ego_position = self.ego.position
+        road.vehicles = [
+            v for v in road.vehicles if v is self.ego or np.hypot(*(v.position - ego_position)) <= radius
+        ]
+
+    def _fill(self, min_distance: float) -> None:
+        missing = self.config.vehicles - len(self._others())
+        for _ in range(max(0, missing)):
+            if not self._spawn(min_distance, self.config.window_radius_m):
+                break  # the window is full for now; try again next frame
+
+    def _spawn(self, min_distance: float, max_distance: float) -> bool:
+        """Place one vehicle on a random lane at a distance from the ego in [min, max]; False if no room."""
+        road = self.env.unwrapped.road
+        rng = self._rng
+        ego_position = self.ego.position
+        others = road.vehicles
+        positions = np.array([v.position for v in others])
+        half_sizes = np.array([(v.LENGTH / 2.0, v.WIDTH / 2.0) for v in others])
+        for _ in range(SPAWN_ATTEMPTS):
+            pick = int(rng.integers(len(self._lanes)))
+            lane = self._lanes[pick]
+            s_ego, _ = lane.local_coordinates(ego_position)
+            s = float(rng.uniform(s_ego - max_distance, s_ego + max_distance))
+            actor_class = self._classes[int(rng.choice(len(self._classes), p=self._class_weights))]
+            speed = float(rng.uniform(*self.config.speed_range_mps))
+            destination = self._nodes[int(rng.integers(len(self._nodes)))]
+            if not 0.0 <= s <= lane.length:
+                continue
+            position = lane.position(s, 0.0)
+            distance = float(np.hypot(*(position - ego_position)))
+            if not min_distance <= distance <= max_distance:
+                continue
+            vehicle_type = VEHICLE_TYPES[actor_class]
+            if _blocked(position, lane.heading_at(s), vehicle_type, positions, half_sizes):
+                continue
+            vehicle = vehicle_type(
+                road, position, heading=lane.heading_at(s), speed=speed,
+                target_lane_index=self._lane_indices[pick], target_speed=speed,
+            )
+            vehicle.plan_route_to(destination)
+            vehicle.simrig_id = self._next_id
+            self._next_id += 1
+            road.vehicles.append(vehicle)
+            return True
+        return False
+
+    # ------------------------------------------------------------------ ground truth
+    def _state(self, events: tuple[str, ...]) -> WorldState:
+        """Ground truth now, converted from highway-env's frame (y right) to the world frame (y left)."""
+        others = self._others()
+        for vehicle in others:
+            if getattr(vehicle, "simrig_id", -1) < 0:
+                raise RuntimeError(f"a vehicle not spawned by simrig appeared in {self.config.env}: {vehicle!r}")
+        n = len(others)
+        boxes = np.empty((n, 9))
+        if n:
+            positions = np.array([v.position for v in others])
+            velocities = np.array([v.velocity for v in others])
+            boxes[:, 0] = positions[:, 0]
+            boxes[:, 1] = -positions[:, 1]
+            boxes[:, 3] = [v.LENGTH for v in others]
+            boxes[:, 4] = [v.WIDTH for v in others]
+            boxes[:, 5] = [v.HEIGHT for v in others]
+            boxes[:, 2] = boxes[:, 5] / 2.0
+            boxes[:, 6] = [-v.heading for v in others]
+            boxes[:, 7] = velocities[:, 0]
+            boxes[:, 8] = -velocities[:, 1]
+        ego = self.ego
+        ego_pose = EgoPose(
+            x=float(ego.position[0]),
+            y=float(-ego.position[1]),
+            z=0.0,
+            yaw=float(-ego.heading),
+            vx=float(ego.velocity[0]),
+            vy=float(-ego.velocity[1]),
+        )
+        return WorldState(
+            frame=self._frame,
+            timestamp=self._frame / self.frame_rate_hz,
+            ego=ego_pose,
+            actor_ids=np.array([v.simrig_id for v in others], dtype=np.int64),
+            classes=np.array([v.ACTOR_CLASS.value for v in others], dtype=object),
+            boxes=boxes,
+            events=events,
+        )
+
+
+def _blocked(position, heading, vehicle_type, positions: np.ndarray, half_sizes: np.ndarray) -> bool:
+    """Whether a vehicle placed at ``position`` with ``heading`` [rad] (highway-env frame) would overlap the
+    lane of, and come within :data:`SPAWN_CLEARANCE_M` bumper to bumper of, any vehicle at ``positions``
+    (``(M, 2)``, half lengths and widths ``(M, 2)``). Distances are taken along and across the new vehicle's
+    heading, so neighbours in the next lane do not block it."""
+    if not len(positions):
+        return False
+    direction = np.array([np.cos(heading), np.sin(heading)])
+    offset = positions - position
+    along = np.abs(offset @ direction)
+    across = np.abs(offset[:, 0] * direction[1] - offset[:, 1] * direction[0])
+    same_lane = across < half_sizes[:, 1] + vehicle_type.WIDTH / 2.0 + 0.5
+    close = along < half_sizes[:, 0] + vehicle_type.LENGTH / 2.0 + SPAWN_CLEARANCE_M
+    return bool(np.any(same_lane & close))
