@@ -1,0 +1,124 @@
+"""The ``simrig`` command line.
+
+Every user error (a bad scenario, a bad argument, an output folder that holds a dataset) is printed as one
+line ``simrig: error: ...`` with exit status 2; no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from scenarios import DEFAULT_SCENARIO, ScenarioError, catalog, load_scenario
+
+from .errors import SimrigError
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more, got {value}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    value = _non_negative_int(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError("must be at least 1, got 0")
+    return value
+
+
+def _cmd_generate(args: argparse.Namespace) -> int:
+    from .dataset import Dataset
+    from .generate import generate
+
+    scenario = load_scenario(args.scenario)
+    result = generate(
+        scenario,
+        seed=args.seed,
+        out=args.out,
+        frames=args.frames,
+        overwrite=args.overwrite,
+        progress=not args.quiet,
+    )
+    print(Dataset.open(result.path).summary())
+    times = result.times
+    print(
+        f"time      {times.total:.1f} s: traffic {times.traffic:.1f} s, projection {times.projection:.1f} s, "
+        f"writing {times.writing:.1f} s ({result.manifest['frames'] / times.total:.1f} frames/s)"
+    )
+    for event in result.manifest["events"]:
+        if event["event"] in ("ego_crashed", "env_terminated"):
+            print(
+                f"warning: {event['event']} at frame {event['frame']}; the scenario ran on to its last frame",
+                file=sys.stderr,
+            )
+    return 0
+
+
+def _cmd_scenarios(args: argparse.Namespace) -> int:
+    entries = catalog()
+    width = max(len(name) for name in entries)
+    for name in entries:
+        scenario = load_scenario(name)
+        marker = "*" if name == DEFAULT_SCENARIO else " "
+        print(f"{marker} {name:<{width}}  {scenario.description}")
+    print(f"(* default; {len(entries)} scenarios in {Path(next(iter(entries.values()))).parent})")
+    return 0
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    from .dataset import Dataset
+
+    dataset = Dataset.open(args.dataset, verify=args.verify)
+    print(dataset.summary())
+    if args.verify:
+        print("verified  every file matches its SHA-256 in the manifest")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="simrig", description="A test bench for multi-camera multi-object trackers on moving vehicles."
+    )
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    gen = commands.add_parser("generate", help="generate a dataset from a scenario")
+    gen.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
+                     help=f"catalog name or .toml file (default: {DEFAULT_SCENARIO})")
+    gen.add_argument("--seed", type=_non_negative_int, default=0, help="scenario seed (default 0)")
+    gen.add_argument("--frames", type=_positive_int, default=None, help="frames to generate (default: the scenario's)")
+    gen.add_argument("--out", type=Path, required=True, help="output dataset folder")
+    gen.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in --out")
+    gen.add_argument("--quiet", action="store_true", help="no progress bar")
+    gen.set_defaults(run=_cmd_generate)
+
+    scen = commands.add_parser("scenarios", help="list the scenario catalog")
+    scen.set_defaults(run=_cmd_scenarios)
+
+    info = commands.add_parser("info", help="summarise a dataset folder")
+    info.add_argument("dataset", type=Path)
+    info.add_argument("--verify", action="store_true", help="also check every file's SHA-256")
+    info.set_defaults(run=_cmd_info)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.run(args)
+    except (SimrigError, ScenarioError) as error:
+        print(f"simrig: error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("simrig: interrupted (a generation in progress leaves no dataset behind)", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,169 @@
+"""Reading a dataset folder back into simrig's records."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from ..errors import DatasetError
+from ..rig import rig_from_dict
+from ..types import BOX2D_FIELDS, BOX3D_FIELDS, CameraGroundTruth, EgoPose, GroundTruthFrame, Rig
+from .manifest import MANIFEST_NAME, file_sha256, read_manifest
+from .tables import SCHEMAS
+
+
+class Dataset:
+    """A complete dataset folder. Open with :meth:`open`; tables load on first use."""
+
+    def __init__(self, path: Path, manifest: dict):
+        self.path = path
+        self.manifest = manifest
+
+    @classmethod
+    def open(cls, path: Path | str, *, verify: bool = False) -> Dataset:
+        """Open ``path``; a :class:`DatasetError` if it holds no complete manifest (e.g. an interrupted
+        generation). ``verify`` also checks every file's SHA-256 against the manifest."""
+        path = Path(path)
+        if not path.is_dir():
+            raise DatasetError(f"dataset folder {str(path)!r} does not exist")
+        manifest = read_manifest(path)
+        if manifest is None:
+            raise DatasetError(
+                f"{str(path)!r} holds no complete simrig dataset ({MANIFEST_NAME} missing or not complete; "
+                "an interrupted generation leaves none)"
+            )
+        dataset = cls(path, manifest)
+        if verify:
+            dataset.verify()
+        return dataset
+
+    def verify(self) -> None:
+        """Check that every file listed in the manifest exists and has the recorded SHA-256."""
+        for name, entry in self.manifest["files"].items():
+            file = self.path / entry["file"]
+            if not file.exists():
+                raise DatasetError(f"{self.path}: file {entry['file']!r} ({name}) listed in the manifest is missing")
+            if file_sha256(file) != entry["sha256"]:
+                raise DatasetError(f"{self.path}: file {entry['file']!r} does not match its SHA-256 in the manifest")
+
+    # ------------------------------------------------------------------ metadata
+    @property
+    def seed(self) -> int:
+        return int(self.manifest["seed"])
+
+    @property
+    def scenario(self) -> dict:
+        """The resolved scenario the dataset was generated from (as a plain dict)."""
+        return self.manifest["scenario"]
+
+    @property
+    def frame_count(self) -> int:
+        return int(self.manifest["frames"])
+
+    @cached_property
+    def rig(self) -> Rig:
+        with (self.path / self.manifest["files"]["rig"]["file"]).open(encoding="utf-8") as handle:
+            return rig_from_dict(json.load(handle))
+
+    def table(self, name: str) -> pa.Table:
+        """One of the Parquet tables (``ego_poses``, ``ground_truth``, ``projections``)."""
+        if name not in SCHEMAS:
+            raise KeyError(f"unknown table {name!r}; tables: {', '.join(SCHEMAS)}")
+        return self._tables[name]
+
+    @cached_property
+    def _tables(self) -> dict[str, pa.Table]:
+        tables = {}
+        for name, schema in SCHEMAS.items():
+            file = self.path / self.manifest["files"][name]["file"]
+            table = pq.read_table(file)
+            if not table.schema.equals(schema, check_metadata=False):
+                raise DatasetError(f"{file}: columns {table.schema.names} do not match the {name} schema")
+            tables[name] = table
+        return tables
+
+    # ------------------------------------------------------------------ records
+    def ground_truth_frames(self) -> Iterator[GroundTruthFrame]:
+        """Every frame's :class:`GroundTruthFrame`, in order, with per-camera projections."""
+        ego = {name: column.to_numpy() for name, column in zip(
+            self.table("ego_poses").column_names, self.table("ego_poses").columns, strict=True
+        )}
+        truth = self.table("ground_truth")
+        frames = truth.column("frame").to_numpy()
+        ids = truth.column("actor_id").to_numpy()
+        classes = np.asarray(truth.column("class").to_pylist(), dtype=object)
+        boxes = np.column_stack([truth.column(name).to_numpy() for name in BOX3D_FIELDS]) if len(truth) else (
+            np.zeros((0, len(BOX3D_FIELDS)))
+        )
+        projections = self.table("projections")
+        proj_frames = projections.column("frame").to_numpy()
+        proj_boxes = np.column_stack([projections.column(name).to_numpy() for name in BOX2D_FIELDS]) if len(
+            projections
+        ) else np.zeros((0, 4))
+        truncation = projections.column("truncation").to_numpy()
+        depth = projections.column("depth").to_numpy()
+        in_view = projections.column("in_view").to_numpy(zero_copy_only=False)
+        names = self.rig.camera_names
+        c = len(names)
+        for row, frame in enumerate(ego["frame"]):
+            lo, hi = np.searchsorted(frames, [frame, frame + 1])
+            plo, phi = np.searchsorted(proj_frames, [frame, frame + 1])
+            n = hi - lo
+            if phi - plo != n * c:
+                raise DatasetError(
+                    f"{self.path}: frame {frame} has {n} actors but {phi - plo} projection rows ({c} cameras)"
+                )
+            per_camera = {
+                name: CameraGroundTruth(
+                    boxes=proj_boxes[plo:phi][index::c],
+                    truncation=truncation[plo:phi][index::c],
+                    depth=depth[plo:phi][index::c],
+                    in_view=in_view[plo:phi][index::c],
+                )
+                for index, name in enumerate(names)
+            }
+            yield GroundTruthFrame(
+                frame=int(frame),
+                timestamp=float(ego["timestamp"][row]),
+                ego=EgoPose(*(float(ego[name][row]) for name in ("x", "y", "z", "yaw", "vx", "vy"))),
+                actor_ids=ids[lo:hi],
+                classes=classes[lo:hi],
+                boxes=boxes[lo:hi],
+                cameras=per_camera,
+            )
+
+    def summary(self) -> str:
+        """A few readable lines: scenario, seed, frames, actors, rig, rows, events."""
+        truth = self.table("ground_truth")
+        projections = self.table("projections")
+        ids = truth.column("actor_id").to_numpy()
+        class_counts = {}
+        unique_ids, first = np.unique(ids, return_index=True)
+        if len(truth):
+            first_classes = np.asarray(truth.column("class").to_pylist(), dtype=object)[first]
+            names, counts = np.unique(first_classes.astype(str), return_counts=True)
+            class_counts = dict(zip(names.tolist(), counts.tolist(), strict=True))
+        per_frame = np.bincount(truth.column("frame").to_numpy()) if len(truth) else np.zeros(1, dtype=int)
+        visible = projections.column("in_view").to_numpy(zero_copy_only=False)
+        scenario = self.scenario
+        event_text = ", ".join(f"{event['event']} at frame {event['frame']}" for event in self.manifest["events"])
+        lines = [
+            f"dataset   {self.path}",
+            f"scenario  {scenario['name']} ({scenario['traffic']['env']}), seed {self.seed}",
+            f"frames    {self.frame_count} at {scenario['frame_rate_hz']:g} Hz "
+            f"({self.frame_count / scenario['frame_rate_hz']:.1f} s)",
+            f"actors    {len(unique_ids)} distinct "
+            f"({', '.join(f'{k} {v}' for k, v in class_counts.items()) or 'none'}); "
+            f"{per_frame.min()}–{per_frame.max()} per frame, mean {per_frame.mean():.1f}",
+            f"rig       {self.rig.name}: {', '.join(self.rig.camera_names)}",
+            f"rows      ground_truth {len(truth)}, projections {len(projections)} "
+            f"({int(visible.sum())} in view)",
+            f"events    {event_text or 'none'}",
+        ]
+        return "\n".join(lines)

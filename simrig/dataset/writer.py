@@ -1,0 +1,160 @@
+"""Writing a dataset folder atomically.
+
+Everything is written into a hidden sibling folder ``.<name>.partial-<pid>``; the manifest (with
+``complete: true`` as its last key) is written last, and only then is the folder renamed to its final
+name. An exception or Ctrl-C removes the partial folder; a hard kill leaves it behind under its hidden
+name, where no reader looks, and the next run into the same place removes it.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from ..errors import DatasetError, DatasetExistsError
+from .manifest import FORMAT_NAME, FORMAT_VERSION, MANIFEST_NAME, file_sha256, read_manifest, write_json_atomic
+from .tables import SCHEMAS
+
+FRAMES_PER_ROW_GROUP = 100
+"""Frames buffered in memory before a Parquet row group is written (bounds memory on long runs)."""
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def check_output_folder(out: Path, *, overwrite: bool) -> None:
+    """Refuse to write into ``out`` if it holds a complete dataset (without ``overwrite``) or foreign files."""
+    if not out.exists():
+        return
+    if not out.is_dir():
+        raise DatasetError(f"output {str(out)!r} exists and is not a folder")
+    manifest = read_manifest(out)
+    if manifest is not None and not overwrite:
+        raise DatasetExistsError(
+            f"output folder {str(out)!r} already holds a complete dataset "
+            f"({manifest['scenario']['name']}, seed {manifest['seed']}); pass --overwrite to replace it"
+        )
+    if manifest is None and any(out.iterdir()) and not overwrite:
+        raise DatasetError(
+            f"output folder {str(out)!r} is not empty and holds no simrig dataset; "
+            "choose another folder or pass --overwrite to replace it"
+        )
+
+
+class DatasetWriter:
+    """Streams frames into Parquet tables in a partial folder and publishes it on :meth:`commit`.
+
+    Use as a context manager; leaving the block without :meth:`commit` (an exception, Ctrl-C) deletes the
+    partial folder.
+    """
+
+    def __init__(self, out: Path | str, *, overwrite: bool = False):
+        self.out = Path(out)
+        self.overwrite = overwrite
+        self.partial = self.out.parent / f".{self.out.name}.partial-{os.getpid()}"
+        self._writers: dict[str, pq.ParquetWriter] = {}
+        self._buffers: dict[str, list[dict]] = {name: [] for name in SCHEMAS}
+        self._rows: dict[str, int] = dict.fromkeys(SCHEMAS, 0)
+        self._buffered_frames = 0
+        self._committed = False
+
+    def __enter__(self) -> DatasetWriter:
+        check_output_folder(self.out, overwrite=self.overwrite)
+        self.out.parent.mkdir(parents=True, exist_ok=True)
+        self._remove_stale_partials()
+        self.partial.mkdir()
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        for writer in self._writers.values():
+            writer.close()
+        self._writers.clear()
+        if not self._committed:
+            shutil.rmtree(self.partial, ignore_errors=True)
+
+    def _remove_stale_partials(self) -> None:
+        for stale in self.out.parent.glob(f".{self.out.name}.partial-*"):
+            pid = stale.name.rsplit("-", 1)[-1]
+            if not pid.isdigit() or int(pid) == os.getpid() or not _pid_alive(int(pid)):
+                shutil.rmtree(stale, ignore_errors=True)
+
+    # ------------------------------------------------------------------ content
+    def write_frame(self, columns: dict[str, dict[str, np.ndarray]]) -> None:
+        """Buffer one frame's columns per table (see :func:`simrig.dataset.tables.frame_columns`)."""
+        for name, table_columns in columns.items():
+            self._buffers[name].append(table_columns)
+        self._buffered_frames += 1
+        if self._buffered_frames >= FRAMES_PER_ROW_GROUP:
+            self._flush()
+
+    def write_json(self, filename: str, data: dict) -> None:
+        """A JSON side file (e.g. ``rig.json``) in the dataset folder."""
+        write_json_atomic(self.partial / filename, data)
+
+    def _flush(self) -> None:
+        for name, chunks in self._buffers.items():
+            schema = SCHEMAS[name]
+            if not chunks:
+                continue
+            arrays = [
+                pa.array(np.concatenate([chunk[field.name] for chunk in chunks]), type=field.type)
+                for field in schema
+            ]
+            table = pa.Table.from_arrays(arrays, schema=schema)
+            if name not in self._writers:
+                self._writers[name] = pq.ParquetWriter(self.partial / f"{name}.parquet", schema)
+            self._writers[name].write_table(table)
+            self._rows[name] += table.num_rows
+            chunks.clear()
+        self._buffered_frames = 0
+
+    # ------------------------------------------------------------------ publishing
+    def commit(self, manifest: dict) -> dict:
+        """Close the tables, hash every file, write the manifest last and publish the folder.
+
+        ``manifest`` holds the run's description (scenario, seed, frames, versions, events); this adds the
+        format, the tables' row counts and SHA-256 hashes, and ``complete: true`` as the last key. Returns
+        the manifest written.
+        """
+        self._flush()
+        for name, schema in SCHEMAS.items():
+            if name not in self._writers:  # a table with no rows still gets a file with its schema
+                self._writers[name] = pq.ParquetWriter(self.partial / f"{name}.parquet", schema)
+        for writer in self._writers.values():
+            writer.close()
+        self._writers.clear()
+        files = {}
+        for path in sorted(self.partial.iterdir()):
+            entry = {"file": path.name, "sha256": file_sha256(path)}
+            if path.stem in self._rows:
+                entry["rows"] = self._rows[path.stem]
+            files[path.stem] = entry
+        full = {"format": FORMAT_NAME, "format_version": FORMAT_VERSION, **manifest, "files": files}
+        full.pop("complete", None)
+        full["complete"] = True
+        write_json_atomic(self.partial / MANIFEST_NAME, full)
+        self._publish()
+        self._committed = True
+        return full
+
+    def _publish(self) -> None:
+        old = None
+        if self.out.exists():
+            check_output_folder(self.out, overwrite=self.overwrite)  # it may have changed since we started
+            old = self.out.parent / f".{self.out.name}.old-{os.getpid()}"
+            os.replace(self.out, old)
+        os.replace(self.partial, self.out)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
