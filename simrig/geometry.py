@@ -70,26 +70,34 @@ def clip_convex_polygons(
     """Clip convex polygons to the half-spaces ``normal · p + offset ≥ 0`` (one per polygon).
 
     points: ``(M, K, D)`` vertices in order, the first ``count[m]`` valid; normals ``(M, D)``; offsets ``(M,)``.
-    Returns ``(M, K + 1, D)`` vertices and the new ``(M,)`` counts (a convex polygon gains at most one vertex).
+    Returns vertices and the new ``(M,)`` counts; the array widens to ``K + 1`` (a convex polygon gains at
+    most one vertex) only when some polygon is actually cut.
     """
     m, k, _ = points.shape
     index = np.arange(k)
     valid = index[None, :] < count[:, None]
-    following = (index[None, :] + 1) % np.maximum(count, 1)[:, None]
     distance = np.einsum("mkd,md->mk", points, normals) + offsets[:, None]
-    distance_next = np.take_along_axis(distance, following, axis=1)
-    inside, inside_next = distance >= 0.0, distance_next >= 0.0
-    crossing = valid & (inside != inside_next)
+    cut = np.nonzero((valid & (distance < 0.0)).any(axis=1))[0]
+    if not len(cut):
+        return points, count
+    rows = np.arange(len(cut))[:, None]
+    sub_points, sub_distance, sub_valid = points[cut], distance[cut], valid[cut]
+    following = (index[None, :] + 1) % np.maximum(count[cut], 1)[:, None]
+    distance_next = sub_distance[rows, following]
+    inside, inside_next = sub_distance >= 0.0, distance_next >= 0.0
+    crossing = sub_valid & (inside != inside_next)
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(crossing, distance / (distance - distance_next), 0.0)
-    nxt = np.take_along_axis(points, following[..., None], axis=1)
-    intersection = points + t[..., None] * (nxt - points)
-    candidates = np.stack([points, intersection], axis=2).reshape(m, 2 * k, -1)
-    keep = np.stack([valid & inside, crossing], axis=2).reshape(m, 2 * k)
-    order = np.argsort(~keep, axis=1, kind="stable")
-    width = min(2 * k, k + 1)
-    kept = np.take_along_axis(candidates, order[:, :width, None], axis=1)
-    return kept, keep.sum(axis=1)
+        t = np.where(crossing, sub_distance / (sub_distance - distance_next), 0.0)
+    intersection = sub_points + t[..., None] * (sub_points[rows, following] - sub_points)
+    candidates = np.stack([sub_points, intersection], axis=2).reshape(len(cut), 2 * k, -1)
+    keep = np.stack([sub_valid & inside, crossing], axis=2).reshape(len(cut), 2 * k)
+    order = np.argsort(~keep, axis=1, kind="stable")[:, : k + 1]
+    out = np.zeros((m, k + 1, points.shape[2]))
+    out[:, :k] = points
+    out[cut] = candidates[rows, order]
+    new_count = count.copy()
+    new_count[cut] = keep.sum(axis=1)
+    return out, new_count
 
 
 def _masked_bounds(points: np.ndarray, valid: np.ndarray, axis: int) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,16 @@
+"""Shared fixtures: a small scenario that generates in about a second."""
+
+import pytest
+
+from scenarios import load_scenario
+
+
+@pytest.fixture(scope="session")
+def small_scenario(tmp_path_factory):
+    """highway_surround6 with 15 vehicles in a 100 m window: the default rig, quick to run."""
+    path = tmp_path_factory.mktemp("scenario") / "small.toml"
+    path.write_text(
+        'extends = "highway_surround6"\nframes = 30\n'
+        "[traffic]\nvehicles = 15\nwindow_radius_m = 100.0\nspawn_min_distance_m = 70.0\n"
+    )
+    return load_scenario(path)

@@ -1,0 +1,114 @@
+"""Benchmark: frames per second of ``simrig generate`` against bare highway-env stepping of the same traffic.
+
+Run explicitly (not part of the test suite)::
+
+    python tests/perf/generate.py [--frames 300] [--repeats 3]
+
+Both sides start from the same populated highway (``highway_surround6``: 40 vehicles, seed 0):
+
+* bare — ``env.step(None)`` on that traffic, nothing else (no window upkeep, projection or writing);
+* generate — the whole of :func:`simrig.generate.generate` (traffic with window upkeep, projection into six
+  cameras, Parquet writing, hashing, manifest).
+
+Runs alternate (bare, generate, bare, generate, ...) so that machine noise hits both; the table reports
+medians and the overhead ratio. Target (issue 2): generate adds at most 30% over bare stepping. The table
+is printed and written to ``reports/perf/generate.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from scenarios import load_scenario
+from simrig.generate import generate
+from simrig.seeding import RandomStreams
+from simrig.world import TrafficWorld
+
+REPORT = Path(__file__).resolve().parents[2] / "reports" / "perf" / "generate.md"
+SCENARIO = "highway_surround6"
+
+
+def bare_stepping_seconds(scenario, frames: int, seed: int) -> tuple[float, float]:
+    """Seconds for ``frames − 1`` bare ``env.step(None)`` calls after the same reset as ``generate``,
+    plus the mean vehicle count during them."""
+    streams = RandomStreams(seed)
+    world = TrafficWorld(
+        scenario.traffic, scenario.frame_rate_hz,
+        env_seed=streams.integer_seed("traffic"), rng=streams.generator("population"),
+    )
+    world.reset()
+    env = world.env
+    road = env.unwrapped.road
+    counts = []
+    started = time.perf_counter()
+    for _ in range(frames - 1):
+        env.step(None)
+        counts.append(len(road.vehicles) - 1)
+    elapsed = time.perf_counter() - started
+    world.close()
+    return elapsed, statistics.fmean(counts)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=300)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    scenario = load_scenario(SCENARIO)
+
+    bare, full, traffic, projection, writing, vehicles = [], [], [], [], [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for repeat in range(args.repeats):
+            seconds, mean_vehicles = bare_stepping_seconds(scenario, args.frames, args.seed)
+            bare.append(seconds)
+            vehicles.append(mean_vehicles)
+            result = generate(scenario, seed=args.seed, out=Path(tmp) / f"run{repeat}", frames=args.frames)
+            full.append(result.times.total)
+            traffic.append(result.times.traffic)
+            projection.append(result.times.projection)
+            writing.append(result.times.writing)
+
+    steps = args.frames - 1
+    bare_fps = steps / statistics.median(bare)
+    full_fps = args.frames / statistics.median(full)
+    overhead = bare_fps / full_fps - 1.0
+    per_frame_ms = {name: 1000 * statistics.median(values) / args.frames for name, values in (
+        ("traffic (highway-env + window upkeep)", traffic), ("projection (6 cameras)", projection),
+        ("writing (Parquet, hashes, manifest)", writing),
+    )}
+    command = "python tests/perf/generate.py " + " ".join(sys.argv[1:])
+    lines = [
+        f"# `simrig generate` vs bare highway-env stepping — {SCENARIO}",
+        "",
+        f"Command: `{command.strip()}`  ",
+        f"Machine: {platform.machine()}, Python {platform.python_version()}, "
+        f"{args.frames} frames × {args.repeats} alternating repeats, medians; "
+        f"{statistics.fmean(vehicles):.1f} other vehicles on average.",
+        "",
+        "| what | frames/s | ms/frame |",
+        "|---|---:|---:|",
+        f"| bare highway-env `env.step(None)` | {bare_fps:.1f} | {1000 / bare_fps:.2f} |",
+        f"| `simrig generate` (everything) | {full_fps:.1f} | {1000 / full_fps:.2f} |",
+        *(f"| &nbsp;&nbsp;of which {name} | | {ms:.2f} |" for name, ms in per_frame_ms.items()),
+        "",
+        f"Overhead of generate over bare stepping: **{overhead * 100:+.1f}%** (target: at most +30%; "
+        f"{'met' if overhead <= 0.30 else 'MISSED'}).",
+        "",
+    ]
+    text = "\n".join(lines)
+    print(text)
+    REPORT.parent.mkdir(parents=True, exist_ok=True)
+    REPORT.write_text(text)
+    print(f"written to {REPORT}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

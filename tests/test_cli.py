@@ -1,0 +1,65 @@
+"""The command line: summaries, and one-line errors that name the problem."""
+
+import pytest
+
+from simrig.cli import main
+
+
+def _error_line(capsys):
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("simrig: error:")
+    assert "\n" not in err and "Traceback" not in err
+    return err
+
+
+def test_generate_prints_a_summary_then_info_reads_it(tmp_path, capsys):
+    out = tmp_path / "d"
+    assert main(["generate", "highway_stereo", "--seed", "4", "--frames", "8", "--out", str(out), "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    assert "highway_stereo" in printed and "seed 4" in printed and "left, right" in printed
+    assert main(["info", str(out), "--verify"]) == 0
+    assert "verified" in capsys.readouterr().out
+
+
+def test_scenarios_lists_the_catalog_one_line_each(capsys):
+    assert main(["scenarios"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert any(line.startswith("* highway_surround6") for line in lines)
+    assert any("highway_stereo" in line for line in lines)
+
+
+def test_unknown_scenario_key_is_one_line(tmp_path, capsys):
+    path = tmp_path / "s.toml"
+    path.write_text('extends = "highway_surround6"\n[traffic]\nlane_count = 3\n')
+    assert main(["generate", str(path), "--out", str(tmp_path / "d")]) == 2
+    err = _error_line(capsys)
+    assert "traffic.lane_count: unknown key" in err and str(path) in err
+
+
+def test_unknown_preset_is_one_line(tmp_path, capsys):
+    path = tmp_path / "s.toml"
+    path.write_text('extends = "highway_surround6"\n[rig]\npreset = "octopus"\n')
+    assert main(["generate", str(path), "--out", str(tmp_path / "d")]) == 2
+    assert "rig.preset" in _error_line(capsys)
+
+
+def test_negative_frame_count_is_one_line(tmp_path, capsys):
+    with pytest.raises(SystemExit) as raised:
+        main(["generate", "highway_surround6", "--frames", "-3", "--out", str(tmp_path / "d")])
+    assert raised.value.code == 2
+    err = _error_line(capsys)
+    assert "argument --frames: must be at least 1, got -3" in err
+
+
+def test_complete_output_folder_is_one_line(tmp_path, capsys):
+    out = tmp_path / "d"
+    assert main(["generate", "highway_stereo", "--frames", "3", "--out", str(out), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["generate", "highway_stereo", "--frames", "3", "--out", str(out), "--quiet"]) == 2
+    err = _error_line(capsys)
+    assert "already holds a complete dataset" in err and "--overwrite" in err
+
+
+def test_info_on_a_folder_without_dataset_is_one_line(tmp_path, capsys):
+    assert main(["info", str(tmp_path)]) == 2
+    assert "no complete simrig dataset" in _error_line(capsys)

@@ -1,0 +1,120 @@
+"""highway-env as the traffic source: frames, ids, sizes, density and determinism."""
+
+import numpy as np
+import pytest
+from highway_env.vehicle.behavior import IDMVehicle
+
+from scenarios.schema import TrafficConfig
+from simrig.seeding import RandomStreams
+from simrig.world import CLASS_SPECS, TrafficWorld
+from simrig.world.vehicles import SimrigVehicle
+
+
+def _world(seed=3, **overrides):
+    streams = RandomStreams(seed)
+    config = TrafficConfig(**{"vehicles": 30, "window_radius_m": 120.0, "spawn_min_distance_m": 80.0, **overrides})
+    return TrafficWorld(config, 10.0, env_seed=streams.integer_seed("traffic"), rng=streams.generator("population"))
+
+
+def _run(world, frames):
+    states = [world.reset()]
+    states += [world.step() for _ in range(frames - 1)]
+    return states
+
+
+def test_world_frame_has_y_to_the_left():
+    world = _world()
+    world.reset()
+    for _ in range(5):
+        state = world.step()
+    ego = world.ego
+    road_vehicles = {v.simrig_id: v for v in world.env.unwrapped.road.vehicles if v is not ego}
+    ego_lane = ego.lane_index[2]
+    checked = 0
+    for actor_id, box in zip(state.actor_ids, state.boxes, strict=True):
+        lane = road_vehicles[actor_id].lane_index[2]
+        if lane < ego_lane:  # highway-env lane 0 is the leftmost
+            assert box[1] > state.ego.y
+            checked += 1
+        elif lane > ego_lane:
+            assert box[1] < state.ego.y
+            checked += 1
+        # Velocity is along the road (+x) and the heading matches it.
+        assert box[7] > 0
+        assert abs(box[6]) < 0.3
+    assert checked > 5
+    world.close()
+
+
+def test_boxes_have_the_class_size_that_highway_env_simulates():
+    world = _world()
+    state = _run(world, 3)[-1]
+    for vehicle in world.env.unwrapped.road.vehicles:
+        assert isinstance(vehicle, SimrigVehicle)
+    by_id = {v.simrig_id: v for v in world.env.unwrapped.road.vehicles}
+    for actor_id, actor_class, box in zip(state.actor_ids, state.classes, state.boxes, strict=True):
+        spec = CLASS_SPECS[actor_class]
+        assert (box[3], box[4], box[5]) == (spec.length, spec.width, spec.height)
+        assert by_id[actor_id].LENGTH == spec.length and by_id[actor_id].WIDTH == spec.width
+        assert box[2] == spec.height / 2  # resting on the road
+    world.close()
+
+
+def test_density_is_held_and_ids_are_never_reused():
+    world = _world()
+    states = _run(world, 150)
+    counts = [len(s.actor_ids) for s in states]
+    assert min(counts[1:]) >= 27 and max(counts) <= 30
+    seen_last = {}
+    for state in states:
+        assert len(set(state.actor_ids.tolist())) == len(state.actor_ids)
+        distances = np.hypot(state.boxes[:, 0] - state.ego.x, state.boxes[:, 1] - state.ego.y)
+        assert (distances <= 120.0 + 1e-9).all()
+        for actor_id in state.actor_ids.tolist():
+            if actor_id in seen_last:
+                assert seen_last[actor_id] == state.frame - 1, f"id {actor_id} came back after a gap"
+            seen_last[actor_id] = state.frame
+    births = len(seen_last) - counts[0]
+    assert births > 5  # traffic turns over: natural births and deaths
+    assert [s.timestamp for s in states[:3]] == [0.0, 0.1, 0.2]
+    world.close()
+
+
+def test_ego_drives_itself_and_the_scenario_never_stops_early():
+    world = _world(vehicles=0)
+    states = _run(world, 60)
+    xs = [s.ego.x for s in states]
+    assert np.all(np.diff(xs) > 0)
+    assert states[-1].ego.vx == pytest.approx(25.0, abs=0.5)  # IDM reaches the target speed on an empty road
+    world.close()
+
+
+def test_same_seed_same_traffic_different_seed_different_traffic():
+    a = _run(_world(seed=11), 40)
+    b = _run(_world(seed=11), 40)
+    c = _run(_world(seed=12), 40)
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x.boxes, y.boxes)
+        np.testing.assert_array_equal(x.actor_ids, y.actor_ids)
+    assert not np.array_equal(a[-1].boxes, c[-1].boxes)
+
+
+def test_intersection_env_does_not_change_other_runs_in_the_process():
+    # intersection-v0 rewrites IDMVehicle's class constants for the whole process; ours must not follow.
+    before = _run(_world(seed=5), 60)
+    intersection = _world(seed=5, env="intersection-v0", vehicles=8, window_radius_m=60.0, spawn_min_distance_m=30.0,
+                          speed_range_mps=(6.0, 9.0), ego_speed_mps=8.0)
+    _run(intersection, 5)
+    assert IDMVehicle.DISTANCE_WANTED == 7  # the process-wide change did happen
+    after = _run(_world(seed=5), 60)
+    np.testing.assert_array_equal(before[-1].boxes, after[-1].boxes)
+
+
+@pytest.mark.parametrize("env", ["merge-v0", "roundabout-v0", "intersection-v0"])
+def test_other_maps_run_with_traffic(env):
+    world = _world(env=env, vehicles=10, window_radius_m=80.0, spawn_min_distance_m=40.0,
+                   speed_range_mps=(8.0, 14.0), ego_speed_mps=10.0)
+    states = _run(world, 40)
+    assert max(len(s.actor_ids) for s in states) >= 5
+    assert all(np.isfinite(s.boxes).all() for s in states)
+    world.close()

@@ -1,0 +1,57 @@
+"""Trackers by name. The reference trackers and a user's tracker register the same way.
+
+A user's package can register through the ``simrig.trackers`` entry-point group (``name = "module:factory"``)
+or by calling :func:`register` directly. An unknown name is an error that lists the known ones.
+
+>>> class Still:
+...     def reset(self, *, rig, seed=None): pass
+...     def step(self, frame): return []
+>>> register("doc-still", Still)
+>>> type(create("doc-still")).__name__
+'Still'
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from importlib import metadata
+
+from .protocol import Tracker
+
+ENTRY_POINT_GROUP = "simrig.trackers"
+_FACTORIES: dict[str, Callable[..., Tracker]] = {}
+
+
+def register(name: str, factory: Callable[..., Tracker], *, replace: bool = False) -> None:
+    """Make ``factory(**params)`` available as tracker ``name``; registering a taken name is an error."""
+    if not name or not isinstance(name, str):
+        raise ValueError(f"tracker name must be a non-empty string, got {name!r}")
+    if name in _FACTORIES and not replace and _FACTORIES[name] is not factory:
+        raise ValueError(f"tracker {name!r} is already registered")
+    _FACTORIES[name] = factory
+
+
+def _load_entry_points() -> None:
+    for entry in metadata.entry_points(group=ENTRY_POINT_GROUP):
+        if entry.name not in _FACTORIES:
+            _FACTORIES[entry.name] = entry.load()
+
+
+def available() -> list[str]:
+    """Names of every registered tracker, sorted."""
+    _load_entry_points()
+    return sorted(_FACTORIES)
+
+
+def create(name: str, **params) -> Tracker:
+    """A new tracker ``name`` built with ``params``; ``KeyError`` naming the known trackers if unknown."""
+    _load_entry_points()
+    try:
+        factory = _FACTORIES[name]
+    except KeyError:
+        known = ", ".join(sorted(_FACTORIES)) or "none registered"
+        raise KeyError(f"unknown tracker {name!r}; known: {known}") from None
+    tracker = factory(**params)
+    if not isinstance(tracker, Tracker):
+        raise TypeError(f"tracker {name!r}: factory returned {type(tracker).__name__}, which has no reset/step")
+    return tracker
