@@ -124,10 +124,15 @@ class Projection:
     in_view: np.ndarray
 
 
+def _camera_parameters(rig: Rig) -> np.ndarray:
+    """``(C, 7)``: fx, fy, cx, cy [px], width, height [px], near [m] of each camera, in rig order."""
+    return np.array([[cam.fx, cam.fy, cam.cx, cam.cy, cam.width, cam.height, cam.near] for cam in rig.cameras])
+
+
 def _frustum_candidates(centres: np.ndarray, radii: np.ndarray, rig: Rig) -> np.ndarray:
     """``(C, N)`` mask of boxes whose bounding sphere (camera-frame ``centres`` (C, N, 3), ``radii`` (N,))
     reaches into each camera's viewing frustum; a conservative pre-test, exact clipping follows."""
-    params = np.array([[cam.fx, cam.fy, cam.cx, cam.cy, cam.width, cam.height, cam.near] for cam in rig.cameras])
+    params = _camera_parameters(rig)
     fx, fy, cx, cy, width, height, near = (params[:, i, None] for i in range(7))
     x, y, z = centres[..., 0], centres[..., 1], centres[..., 2]
     margin = -radii[None, :]
@@ -152,7 +157,7 @@ def _clip_faces_to_image(
     polygons = faces.reshape(-1, 4, 3)
     m = len(polygons)
     camera_of = np.repeat(cameras, len(BOX_FACES))
-    params = np.array([[cam.fx, cam.fy, cam.cx, cam.cy, cam.width, cam.height, cam.near] for cam in rig.cameras])
+    params = _camera_parameters(rig)
     fx, fy, cx, cy, width, height, near = (params[camera_of, i] for i in range(7))
     normal = np.zeros((m, 3))
     normal[:, 2] = 1.0

@@ -17,7 +17,14 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ..errors import DatasetError, DatasetExistsError
-from .manifest import FORMAT_NAME, FORMAT_VERSION, MANIFEST_NAME, file_sha256, read_manifest, write_json_atomic
+from .manifest import (
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    MANIFEST_NAME,
+    file_sha256,
+    read_manifest,
+    write_json_atomic,
+)
 from .tables import SCHEMAS
 
 FRAMES_PER_ROW_GROUP = 100
