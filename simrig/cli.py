@@ -15,24 +15,19 @@ from scenarios import DEFAULT_SCENARIO, ScenarioError, catalog, load_scenario
 from .errors import SimrigError
 
 
-def _non_negative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be 0 or more, got {value}")
-    return value
+def _int_at_least(minimum: int):
+    """An argparse type: an integer ≥ ``minimum``, with a one-line message otherwise."""
 
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be at least {minimum}, got {value}")
+        return value
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
+    return parse
 
 
 class _OneLineParser(argparse.ArgumentParser):
@@ -100,8 +95,9 @@ def build_parser() -> argparse.ArgumentParser:
     gen = commands.add_parser("generate", help="generate a dataset from a scenario")
     gen.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
                      help=f"catalog name or .toml file (default: {DEFAULT_SCENARIO})")
-    gen.add_argument("--seed", type=_non_negative_int, default=0, help="scenario seed (default 0)")
-    gen.add_argument("--frames", type=_positive_int, default=None, help="frames to generate (default: the scenario's)")
+    gen.add_argument("--seed", type=_int_at_least(0), default=0, help="scenario seed (default 0)")
+    gen.add_argument("--frames", type=_int_at_least(1), default=None,
+                     help="frames to generate (default: the scenario's)")
     gen.add_argument("--out", type=Path, required=True, help="output dataset folder")
     gen.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in --out")
     gen.add_argument("--quiet", action="store_true", help="no progress bar")

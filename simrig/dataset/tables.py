@@ -14,8 +14,7 @@ import numpy as np
 import pyarrow as pa
 
 from ..geometry import Projection
-from ..types import BOX2D_FIELDS, BOX3D_FIELDS
-from ..world import WorldState
+from ..types import BOX2D_FIELDS, BOX3D_FIELDS, GroundTruthFrame
 
 _F64 = pa.float64()
 
@@ -39,7 +38,7 @@ PROJECTIONS = pa.schema(
 SCHEMAS: dict[str, pa.Schema] = {"ego_poses": EGO_POSES, "ground_truth": GROUND_TRUTH, "projections": PROJECTIONS}
 
 
-def frame_columns(state: WorldState, projection: Projection, camera_names: tuple[str, ...]) -> dict[str, dict]:
+def frame_columns(state: GroundTruthFrame, projection: Projection, camera_names: tuple[str, ...]) -> dict[str, dict]:
     """Column arrays of one frame for each table (vectorised; camera order is the rig's)."""
     n, c = len(state.actor_ids), len(camera_names)
     ego = state.ego

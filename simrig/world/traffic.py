@@ -18,15 +18,13 @@ What this module adds to highway-env (see ``shared/notes/simulation.md`` for the
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import gymnasium as gym
 import highway_env  # noqa: F401  (registers the environments)
 import numpy as np
 
 from scenarios.schema import TrafficConfig
 
-from ..types import ActorClass, EgoPose
+from ..types import ActorClass, EgoPose, GroundTruthFrame
 from .vehicles import VEHICLE_TYPES, SimrigVehicle
 
 SPAWN_CLEARANCE_M = 10.0
@@ -48,26 +46,11 @@ def _number(value: float) -> int | float:
     return int(value) if float(value).is_integer() else value
 
 
-@dataclass(frozen=True, eq=False)
-class WorldState:
-    """Exact ground truth at one frame, in the world frame.
-
-    frame: index from 0; timestamp [s]; ego: ego pose; actor_ids ``(N,)`` int64; classes ``(N,)`` class
-    names; boxes ``(N, 9)`` in :data:`simrig.types.BOX3D_FIELDS` order; events: what happened in the
-    simulator at this frame, e.g. ``("ego_crashed",)``.
-    """
-
-    frame: int
-    timestamp: float
-    ego: EgoPose
-    actor_ids: np.ndarray
-    classes: np.ndarray
-    boxes: np.ndarray
-    events: tuple[str, ...]
-
-
 class TrafficWorld:
     """Steps highway-env at the scenario's frame rate and reports exact ground truth per frame.
+
+    Each frame is a :class:`~simrig.types.GroundTruthFrame` without camera projections (the rig adds them);
+    its ``events`` are what happened in the simulator at that frame (``ego_crashed``, ``env_terminated``).
 
     ``env_seed`` seeds highway-env (its road and vehicle randomness); ``rng`` drives simrig's own choices
     (where and which vehicles appear). Both come from the scenario seed (:mod:`simrig.seeding`).
@@ -95,7 +78,7 @@ class TrafficWorld:
         self.ego: SimrigVehicle | None = None
 
     # ------------------------------------------------------------------ life cycle
-    def reset(self) -> WorldState:
+    def reset(self) -> GroundTruthFrame:
         """Start the scenario: a fresh road, the IDM ego placed inside the traffic, the window populated."""
         self.env.reset(seed=self._env_seed)
         env = self.env.unwrapped
@@ -129,7 +112,7 @@ class TrafficWorld:
         self._fill(self.config.initial_clearance_m)
         return self._state(())
 
-    def step(self) -> WorldState:
+    def step(self) -> GroundTruthFrame:
         """Advance one frame (1 / frame rate seconds) and keep the traffic window at its density."""
         if self.ego is None:
             raise RuntimeError("TrafficWorld.step() called before reset()")
@@ -204,7 +187,7 @@ class TrafficWorld:
         return False
 
     # ------------------------------------------------------------------ ground truth
-    def _state(self, events: tuple[str, ...]) -> WorldState:
+    def _state(self, events: tuple[str, ...]) -> GroundTruthFrame:
         """Ground truth now, converted from highway-env's frame (y right) to the world frame (y left)."""
         others = self._others()
         for vehicle in others:
@@ -233,7 +216,7 @@ class TrafficWorld:
             vx=float(ego.velocity[0]),
             vy=float(-ego.velocity[1]),
         )
-        return WorldState(
+        return GroundTruthFrame(
             frame=self._frame,
             timestamp=self._frame / self.frame_rate_hz,
             ego=ego_pose,
