@@ -125,3 +125,17 @@ def test_a_generation_killed_halfway_leaves_no_complete_dataset_and_a_rerun_succ
     assert rerun.returncode == 0, rerun.stderr
     assert Dataset.open(out, verify=True).frame_count == 10
     assert [p.name for p in tmp_path.iterdir()] == ["d"]  # the killed run's partial folder is gone
+
+
+def test_a_road_without_traffic_reads_back_as_empty_frames(tmp_path):
+    from scenarios import load_scenario
+
+    path = tmp_path / "empty.toml"
+    path.write_text('extends = "highway_surround6"\n[traffic]\nvehicles = 0\n')
+    generate(load_scenario(path), seed=0, out=tmp_path / "d", frames=4)
+    dataset = Dataset.open(tmp_path / "d", verify=True)
+    frames = list(dataset.ground_truth_frames())
+    assert len(frames) == 4
+    assert frames[0].boxes.shape == (0, 9)
+    assert frames[0].cameras["CAM_FRONT"].boxes.shape == (0, 4)
+    assert "0–0 per frame" in dataset.summary()

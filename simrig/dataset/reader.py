@@ -18,6 +18,11 @@ from .manifest import MANIFEST_NAME, file_sha256, read_manifest
 from .tables import SCHEMAS
 
 
+def _stack(table: pa.Table, names: tuple[str, ...]) -> np.ndarray:
+    """``(rows, len(names))`` float array of the named columns (``(0, len(names))`` for an empty table)."""
+    return np.column_stack([table.column(name).to_numpy() for name in names])
+
+
 class Dataset:
     """A complete dataset folder. Open with :meth:`open`; tables load on first use."""
 
@@ -98,14 +103,10 @@ class Dataset:
         frames = truth.column("frame").to_numpy()
         ids = truth.column("actor_id").to_numpy()
         classes = np.asarray(truth.column("class").to_pylist(), dtype=object)
-        boxes = np.column_stack([truth.column(name).to_numpy() for name in BOX3D_FIELDS]) if len(truth) else (
-            np.zeros((0, len(BOX3D_FIELDS)))
-        )
+        boxes = _stack(truth, BOX3D_FIELDS)
         projections = self.table("projections")
         proj_frames = projections.column("frame").to_numpy()
-        proj_boxes = np.column_stack([projections.column(name).to_numpy() for name in BOX2D_FIELDS]) if len(
-            projections
-        ) else np.zeros((0, 4))
+        proj_boxes = _stack(projections, BOX2D_FIELDS)
         truncation = projections.column("truncation").to_numpy()
         depth = projections.column("depth").to_numpy()
         in_view = projections.column("in_view").to_numpy(zero_copy_only=False)
@@ -149,7 +150,7 @@ class Dataset:
             first_classes = np.asarray(truth.column("class").to_pylist(), dtype=object)[first]
             names, counts = np.unique(first_classes.astype(str), return_counts=True)
             class_counts = dict(zip(names.tolist(), counts.tolist(), strict=True))
-        per_frame = np.bincount(truth.column("frame").to_numpy()) if len(truth) else np.zeros(1, dtype=int)
+        per_frame = np.bincount(truth.column("frame").to_numpy(), minlength=self.frame_count)
         visible = projections.column("in_view").to_numpy(zero_copy_only=False)
         scenario = self.scenario
         event_text = ", ".join(f"{event['event']} at frame {event['frame']}" for event in self.manifest["events"])
