@@ -8,28 +8,18 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
+
+from .base import FiniteFloat, NonNegativeFloat, PositiveFloat, Strict, set_keys
+from .perturbation_schema import Perturbation
+from .sensor_schema import RenderConfig, SensorConfig
 
 TRAFFIC_ENVS = ("highway-v0", "merge-v0", "roundabout-v0", "intersection-v0")
 RIG_PRESETS = ("surround6", "stereo", "ring", "custom")
 ACTOR_CLASSES = ("car", "truck", "bus", "motorcycle")
 
-PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-NonNegativeFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
-FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 
-
-class _Strict(BaseModel):
-    """Base model: unknown keys are errors, values are immutable once validated."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=False)
-
-
-def _set_keys(model: BaseModel) -> set[str]:
-    return set(model.model_fields_set)
-
-
-class TrafficConfig(_Strict):
+class TrafficConfig(Strict):
     """Traffic around the ego vehicle.
 
     The number of other vehicles is held at ``vehicles`` inside a disc of ``window_radius_m`` around the ego:
@@ -39,6 +29,8 @@ class TrafficConfig(_Strict):
     env: Literal["highway-v0", "merge-v0", "roundabout-v0", "intersection-v0"] = "highway-v0"
     lanes: Annotated[int, Field(ge=1, le=8)] = 4
     """[-] lanes of highway-v0 (only valid there: the other maps have a fixed layout)."""
+    ego_lane: Annotated[int, Field(ge=0, le=7)] | None = None
+    """[-] highway-v0 lane the ego starts in, 0 the leftmost; random (from the seed) when omitted."""
     vehicles: Annotated[int, Field(ge=0, le=200)] = 40
     """[-] other vehicles kept inside the window."""
     window_radius_m: PositiveFloat = 150.0
@@ -60,8 +52,10 @@ class TrafficConfig(_Strict):
 
     @model_validator(mode="after")
     def _check(self) -> TrafficConfig:
-        if "lanes" in _set_keys(self) and self.env != "highway-v0":
+        if "lanes" in set_keys(self) and self.env != "highway-v0":
             raise ValueError(f"lanes: only highway-v0 has a configurable lane count, not {self.env}")
+        if self.ego_lane is not None and (self.env != "highway-v0" or self.ego_lane >= self.lanes):
+            raise ValueError(f"ego_lane: must be a lane of highway-v0's {self.lanes} lanes (0 … {self.lanes - 1})")
         if self.spawn_min_distance_m > self.window_radius_m:
             raise ValueError(
                 f"spawn_min_distance_m: {self.spawn_min_distance_m} m exceeds window_radius_m "
@@ -75,7 +69,7 @@ class TrafficConfig(_Strict):
         return self
 
 
-class CustomCamera(_Strict):
+class CustomCamera(Strict):
     """One camera of a ``custom`` rig: pose on the ego [m, deg], horizontal field of view [deg], image [px]."""
 
     name: Annotated[str, Field(min_length=1)]
@@ -97,7 +91,7 @@ _PRESET_KEYS = {
 }
 
 
-class RigConfig(_Strict):
+class RigConfig(Strict):
     """The camera rig. ``preset`` picks the layout; the other keys tune it and must fit the preset:
 
     * ``surround6`` — nuScenes-like ring of six (front, front-left/right at ±55°, back-left/right at
@@ -127,7 +121,7 @@ class RigConfig(_Strict):
     @model_validator(mode="after")
     def _check(self) -> RigConfig:
         allowed = _PRESET_KEYS[self.preset] | {"preset"}
-        foreign = sorted(_set_keys(self) - allowed)
+        foreign = sorted(set_keys(self) - allowed)
         if foreign:
             raise ValueError(f"{', '.join(foreign)}: not a setting of the {self.preset!r} preset")
         if self.preset == "custom":
@@ -144,7 +138,7 @@ class RigConfig(_Strict):
         return self
 
 
-class Scenario(_Strict):
+class Scenario(Strict):
     """A named, fully resolved scenario: traffic, rig and timing."""
 
     name: Annotated[str, Field(min_length=1)]
@@ -155,6 +149,10 @@ class Scenario(_Strict):
     """[-] default number of frames to generate (``--frames`` overrides it)."""
     traffic: TrafficConfig = Field(default_factory=TrafficConfig)
     rig: RigConfig = Field(default_factory=RigConfig)
+    render: RenderConfig = Field(default_factory=RenderConfig)
+    sensor: SensorConfig = Field(default_factory=SensorConfig)
+    perturbations: tuple[Perturbation, ...] = ()
+    """Scheduled perturbations (:mod:`scenarios.perturbation_schema`), applied in the order given."""
 
     @property
     def frame_period_s(self) -> float:

@@ -1,4 +1,8 @@
-"""``simrig generate``: run a scenario's traffic, project it through the rig, write the dataset."""
+"""``simrig generate``: run a scenario's traffic, see it through the rig, detect it, write the dataset.
+
+Per frame: traffic (highway-env) → analytic projection → visibility (pyrender segmentation + analytic
+silhouettes) → the sensor model → optional colour images → the tables.
+"""
 
 from __future__ import annotations
 
@@ -9,13 +13,16 @@ from pathlib import Path
 from tqdm import tqdm
 
 from scenarios import Scenario
+from scenarios.perturbation_schema import WORLD_KINDS
 
 from .dataset import DatasetWriter, check_output_folder
-from .dataset.manifest import package_versions
+from .dataset.manifest import IMAGES_FOLDER, package_versions
 from .dataset.tables import frame_columns
 from .geometry import project_boxes
+from .render.visibility import Visibility
 from .rig import build_rig, rig_to_dict
 from .seeding import RandomStreams
+from .sensor.model import SensorModel
 from .world import TrafficWorld
 
 
@@ -25,6 +32,9 @@ class StageTimes:
 
     traffic: float = 0.0
     projection: float = 0.0
+    visibility: float = 0.0
+    sensor: float = 0.0
+    images: float = 0.0
     writing: float = 0.0
     total: float = 0.0
 
@@ -45,13 +55,15 @@ def generate(
     out: Path | str,
     frames: int | None = None,
     overwrite: bool = False,
+    images: bool = False,
     progress: bool = False,
 ) -> GenerateResult:
     """Generate the dataset of ``scenario`` with ``seed`` into ``out``; ``frames`` defaults to the scenario's.
 
-    Same scenario, seed and frame count give byte-identical tables. Raises
-    :class:`~simrig.errors.DatasetExistsError` if ``out`` holds a complete dataset and ``overwrite`` is false
-    (checked before any simulation work).
+    ``images`` also writes a PNG per camera and frame at the image resolution. Same scenario, seed and
+    frame count give byte-identical files. Raises :class:`~simrig.errors.DatasetExistsError` if ``out``
+    holds a complete dataset and ``overwrite`` is false, and :class:`~scenarios.ScenarioError` for a
+    perturbation naming a camera the rig lacks (both checked before any simulation work).
     """
     frames = scenario.frames if frames is None else frames
     if not isinstance(frames, int) or frames < 1:
@@ -60,6 +72,7 @@ def generate(
     check_output_folder(out, overwrite=overwrite)
     streams = RandomStreams(seed)
     rig = build_rig(scenario.rig)
+    sensor = SensorModel(scenario, rig, streams)
     times = StageTimes()
     started = time.perf_counter()
     world = TrafficWorld(
@@ -67,7 +80,9 @@ def generate(
         scenario.frame_rate_hz,
         env_seed=streams.integer_seed("traffic"),
         rng=streams.generator("population"),
+        scripted=tuple((i, p) for i, p in enumerate(scenario.perturbations) if p.kind in WORLD_KINDS),
     )
+    scene = meter = None
     events: list[dict] = []
     try:
         with DatasetWriter(out, overwrite=overwrite) as writer:
@@ -76,13 +91,44 @@ def generate(
                 tick = time.perf_counter()
                 state = world.reset() if frame == 0 else world.step()
                 events.extend({"frame": state.frame, "event": name} for name in state.events)
-                tock = time.perf_counter()
+                if frame == 0:
+                    markings = world.road_markings()
+                    writer.write_json("road.json", markings.to_dict())
+                    if scenario.render.visibility or images:
+                        from .render.meter import VisibilityMeter
+                        from .render.scene import RigScene
+
+                        scene = RigScene(markings)
+                        meter = VisibilityMeter(rig, scenario.render.visibility_scale, scene)
+                times.traffic += time.perf_counter() - tick
+
+                tick = time.perf_counter()
                 projection = project_boxes(state.boxes, rig, state.ego)
-                tuck = time.perf_counter()
-                writer.write_frame(frame_columns(state, projection, rig.camera_names))
-                times.traffic += tock - tick
-                times.projection += tuck - tock
-                times.writing += time.perf_counter() - tuck
+                times.projection += time.perf_counter() - tick
+
+                tick = time.perf_counter()
+                if scenario.render.visibility:
+                    visibility = meter.measure(state, projection)
+                else:
+                    visibility = Visibility.unmeasured(projection)
+                times.visibility += time.perf_counter() - tick
+
+                tick = time.perf_counter()
+                output = sensor.observe(state, projection, visibility)
+                times.sensor += time.perf_counter() - tick
+
+                if images:
+                    tick = time.perf_counter()
+                    scene.set_frame(state.ego, state.classes, state.boxes)
+                    for camera in rig.cameras:
+                        writer.write_image(
+                            f"{IMAGES_FOLDER}/{camera.name}/{frame:06d}.png", scene.colour(camera, rig, state.ego)
+                        )
+                    times.images += time.perf_counter() - tick
+
+                tick = time.perf_counter()
+                writer.write_frame(frame_columns(state, projection, visibility, output, rig.camera_names))
+                times.writing += time.perf_counter() - tick
             tick = time.perf_counter()
             manifest = writer.commit(
                 {
@@ -90,6 +136,7 @@ def generate(
                     "seed": seed,
                     "frames": frames,
                     "frame_rate_hz": scenario.frame_rate_hz,
+                    "visibility": "rendered" if scenario.render.visibility else "not measured",
                     "versions": package_versions(),
                     "events": events,
                 }

@@ -145,6 +145,32 @@ def _frustum_candidates(centres: np.ndarray, radii: np.ndarray, rig: Rig) -> np.
     )
 
 
+def near_clipped_face_pixels(
+    faces: np.ndarray, cameras: np.ndarray, rig: Rig
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Camera-frame box faces ``(P, F, 4, 3)`` seen by camera index ``cameras`` ``(P,)``, clipped to the near
+    plane (z ≥ near) and projected to pixels.
+
+    Returns ``pixels`` ``(P·F, K, 2)``, vertex ``count`` ``(P·F,)`` and the ``(P·F,)`` camera index of each face
+    polygon; vertices past a polygon's count are meaningless. A face wholly behind the near plane has count 0.
+    """
+    polygons = faces.reshape(-1, 4, 3)
+    m = len(polygons)
+    camera_of = np.repeat(cameras, faces.shape[1])
+    params = _camera_parameters(rig)
+    fx, fy, cx, cy, near = (params[camera_of, i] for i in (0, 1, 2, 3, 6))
+    normal = np.zeros((m, 3))
+    normal[:, 2] = 1.0
+    polygons, count = clip_convex_polygons(polygons, np.full(m, 4), normal, -near)  # keep z >= near
+    valid = np.arange(polygons.shape[1])[None, :] < count[:, None]
+    z = np.where(valid, polygons[..., 2], 1.0)
+    pixels = np.stack(
+        [fx[:, None] * polygons[..., 0] / z + cx[:, None], fy[:, None] * polygons[..., 1] / z + cy[:, None]],
+        axis=-1,
+    )
+    return pixels, count, camera_of
+
+
 def _clip_faces_to_image(
     faces: np.ndarray, cameras: np.ndarray, rig: Rig
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -154,23 +180,13 @@ def _clip_faces_to_image(
     silhouette clipped to the near plane only; ``(P, 2)`` pixels each, ±inf where nothing is left.
     """
     p = len(faces)
-    polygons = faces.reshape(-1, 4, 3)
-    m = len(polygons)
-    camera_of = np.repeat(cameras, len(BOX_FACES))
-    params = _camera_parameters(rig)
-    fx, fy, cx, cy, width, height, near = (params[camera_of, i] for i in range(7))
-    normal = np.zeros((m, 3))
-    normal[:, 2] = 1.0
-    polygons, count = clip_convex_polygons(polygons, np.full(m, 4), normal, -near)  # keep z >= near
-
-    valid = np.arange(polygons.shape[1])[None, :] < count[:, None]
-    z = np.where(valid, polygons[..., 2], 1.0)
-    pixels = np.stack(
-        [fx[:, None] * polygons[..., 0] / z + cx[:, None], fy[:, None] * polygons[..., 1] / z + cy[:, None]],
-        axis=-1,
-    )
+    pixels, count, camera_of = near_clipped_face_pixels(faces, cameras, rig)
+    m = len(pixels)
+    valid = np.arange(pixels.shape[1])[None, :] < count[:, None]
     unclipped = _masked_bounds(pixels.reshape(p, -1, 2), valid.reshape(p, -1), 1)
 
+    params = _camera_parameters(rig)
+    width, height = params[camera_of, 4], params[camera_of, 5]
     zeros, ones = np.zeros(m), np.ones(m)
     for normal, offset in (
         (np.stack([ones, zeros], 1), zeros),  # x >= 0

@@ -18,6 +18,7 @@ Focal lengths follow from the horizontal field of view, fx = (W/2) / tan(hfov/2)
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from scenarios.schema import RigConfig
@@ -151,6 +152,29 @@ def build_rig(config: RigConfig) -> Rig:
     except KeyError:
         raise ValueError(f"rig.preset: unknown preset {config.preset!r}; known: {', '.join(_BUILDERS)}") from None
     return builder(config)
+
+
+def scaled_rig(rig: Rig, scale: float) -> Rig:
+    """The same cameras at ``scale`` × the resolution (same poses and fields of view); the visibility
+    render and the silhouettes use it. Sizes are rounded to whole pixels and the intrinsics follow the
+    actual size ratio, so a pixel ray is unchanged.
+
+    >>> cam = pinhole("c", hfov_deg=90.0, width=1600, height=900, position=(0.0, 0.0, 1.0), yaw_deg=0.0)
+    >>> small = scaled_rig(Rig("r", (cam,)), 0.5).cameras[0]
+    >>> small.width, small.height, round(small.fx, 9), small.cx
+    (800, 450, 400.0, 400.0)
+    """
+    if not 0.0 < scale <= 1.0:
+        raise ValueError(f"scale: must be in (0, 1], got {scale}")
+    cameras = []
+    for camera in rig.cameras:
+        width, height = max(1, round(camera.width * scale)), max(1, round(camera.height * scale))
+        sx, sy = width / camera.width, height / camera.height
+        cameras.append(dataclasses.replace(
+            camera, width=width, height=height, fx=camera.fx * sx, fy=camera.fy * sy, cx=camera.cx * sx,
+            cy=camera.cy * sy,
+        ))
+    return Rig(rig.name, tuple(cameras))
 
 
 def rig_to_dict(rig: Rig) -> dict:

@@ -15,6 +15,9 @@ import numpy as np
 STREAM_KEYS: dict[str, int] = {
     "traffic": 0,  # highway-env's own seed (road and behaviour randomness)
     "population": 1,  # where, which and how fast new vehicles appear
+    "sensor": 2,  # per sensor effect and camera: (effect key, camera index)
+    "embeddings": 3,  # per actor id: its identity embedding
+    "perturbations": 4,  # per perturbation and frame: e.g. whether a frame is dropped
 }
 """Spawn key of each named stream. Append new names with new numbers; never renumber."""
 

@@ -193,16 +193,21 @@ class CameraGroundTruth:
     the bounding box of the actor's silhouette after clipping to the near plane and to the image.
     truncation: ``(N,)`` fraction [0, 1] of the unclipped projected box lying outside the image (NaN where
     not in view). depth: ``(N,)`` camera-frame z of the box centre [m]. in_view: ``(N,)`` bool.
+    occlusion: ``(N,)`` occlusion ratio [0, 1], 1 − visible / unoccluded silhouette pixels (NaN where not in
+    view or not measured); the visible fraction of an actor in the image is ``1 − occlusion``.
     """
 
     boxes: np.ndarray
     truncation: np.ndarray
     depth: np.ndarray
     in_view: np.ndarray
+    occlusion: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "boxes", _readonly(self.boxes, float, (4,), "boxes"))
-        for name, dtype in (("truncation", float), ("depth", float), ("in_view", bool)):
+        if self.occlusion is None:
+            object.__setattr__(self, "occlusion", np.full(len(self.boxes), np.nan))
+        for name, dtype in (("truncation", float), ("depth", float), ("in_view", bool), ("occlusion", float)):
             object.__setattr__(self, name, _readonly(getattr(self, name), dtype, (), name))
 
 

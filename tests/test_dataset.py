@@ -29,7 +29,9 @@ def test_manifest_describes_the_run_and_ends_with_complete(tmp_path, small_scena
     assert manifest["seed"] == 1 and manifest["frames"] == 12
     assert manifest["scenario"]["traffic"]["vehicles"] == 15
     assert {"highway-env", "numpy", "pyarrow", "python"} <= set(manifest["versions"])
-    assert set(manifest["files"]) == {"ego_poses", "ground_truth", "projections", "rig"}
+    assert set(manifest["files"]) == {
+        "ego_poses", "ground_truth", "projections", "visibility", "detections", "sensor_truth", "frames", "rig", "road"
+    }
     dataset = Dataset.open(result.path, verify=True)
     assert dataset.table("ego_poses").num_rows == 12
     rows = manifest["files"]["ground_truth"]["rows"]
@@ -58,7 +60,8 @@ def test_same_seed_same_bytes_other_seed_other_bytes(tmp_path, small_scenario):
     generate(small_scenario, seed=8, out=tmp_path / "c", frames=30)
     a, b, c = (_hashes(tmp_path / name) for name in "abc")
     assert a == b
-    for table in ("ego_poses", "ground_truth", "projections"):
+    assert set(a) >= {"visibility", "detections", "sensor_truth", "frames"}  # rendering on: visibility measured
+    for table in ("ego_poses", "ground_truth", "projections", "visibility", "detections", "sensor_truth"):
         assert a[table] != c[table]
     assert a["rig"] == c["rig"]  # same rig, same bytes
 

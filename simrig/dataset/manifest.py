@@ -17,8 +17,12 @@ from ..errors import DatasetError
 
 MANIFEST_NAME = "manifest.json"
 FORMAT_NAME = "simrig-dataset"
-FORMAT_VERSION = 1
-_VERSIONED_PACKAGES = ("simrig", "highway-env", "gymnasium", "numpy", "scipy", "pyarrow", "pydantic")
+FORMAT_VERSION = 2
+"""2: visibility, detections, sensor_truth and frames tables, road.json, optional images."""
+IMAGES_FOLDER = "images"
+_VERSIONED_PACKAGES = (
+    "simrig", "highway-env", "gymnasium", "numpy", "scipy", "pyarrow", "pydantic", "pyrender", "trimesh", "pillow",
+)
 
 
 def file_sha256(path: Path) -> str:
@@ -28,6 +32,16 @@ def file_sha256(path: Path) -> str:
         for block in iter(lambda: handle.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
+
+
+def folder_digest(folder: Path) -> dict:
+    """``{"folder", "files", "sha256"}`` of every file under ``folder``: one SHA-256 over the sorted relative
+    paths and each file's own SHA-256 (so a renamed, missing or changed file changes it)."""
+    digest = hashlib.sha256()
+    paths = sorted(path for path in folder.rglob("*") if path.is_file())
+    for path in paths:
+        digest.update(f"{path.relative_to(folder).as_posix()}\0{file_sha256(path)}\n".encode())
+    return {"folder": folder.name, "files": len(paths), "sha256": digest.hexdigest()}
 
 
 def package_versions() -> dict[str, str]:

@@ -13,8 +13,20 @@ import pyarrow.parquet as pq
 
 from ..errors import DatasetError
 from ..rig import rig_from_dict
-from ..types import BOX2D_FIELDS, BOX3D_FIELDS, CameraGroundTruth, EgoPose, GroundTruthFrame, Rig
-from .manifest import MANIFEST_NAME, file_sha256, read_manifest
+from ..types import (
+    BOX2D_FIELDS,
+    BOX3D_FIELDS,
+    ActorClass,
+    Box2D,
+    Box3D,
+    CameraGroundTruth,
+    Detection,
+    EgoPose,
+    GroundTruthFrame,
+    Rig,
+    SensorFrame,
+)
+from .manifest import MANIFEST_NAME, file_sha256, folder_digest, read_manifest
 from .tables import SCHEMAS
 
 
@@ -56,6 +68,9 @@ class Dataset:
                 raise DatasetError(f"{self.path}: file {entry['file']!r} ({name}) listed in the manifest is missing")
             if file_sha256(file) != entry["sha256"]:
                 raise DatasetError(f"{self.path}: file {entry['file']!r} does not match its SHA-256 in the manifest")
+        images = self.manifest.get("images")
+        if images is not None and folder_digest(self.path / images["folder"]) != images:
+            raise DatasetError(f"{self.path}: the images under {images['folder']!r} do not match the manifest")
 
     # ------------------------------------------------------------------ metadata
     @property
@@ -77,7 +92,8 @@ class Dataset:
             return rig_from_dict(json.load(handle))
 
     def table(self, name: str) -> pa.Table:
-        """One of the Parquet tables (``ego_poses``, ``ground_truth``, ``projections``)."""
+        """One of the Parquet tables (:data:`simrig.dataset.tables.SCHEMAS`: ``ego_poses``, ``ground_truth``,
+        ``projections``, ``visibility``, ``detections``, ``sensor_truth``, ``frames``)."""
         if name not in SCHEMAS:
             raise KeyError(f"unknown table {name!r}; tables: {', '.join(SCHEMAS)}")
         return self._tables[name]
@@ -94,11 +110,18 @@ class Dataset:
         return tables
 
     # ------------------------------------------------------------------ records
+    def _ego_rows(self) -> list[tuple[int, float, EgoPose]]:
+        """(frame, timestamp [s], ego pose) of every frame, in order."""
+        ego = self.table("ego_poses")
+        columns = {name: ego.column(name).to_numpy() for name in ego.column_names}
+        fields = ("x", "y", "z", "yaw", "vx", "vy")
+        return [
+            (int(frame), float(columns["timestamp"][row]), EgoPose(*(float(columns[name][row]) for name in fields)))
+            for row, frame in enumerate(columns["frame"])
+        ]
+
     def ground_truth_frames(self) -> Iterator[GroundTruthFrame]:
         """Every frame's :class:`GroundTruthFrame`, in order, with per-camera projections."""
-        ego = {name: column.to_numpy() for name, column in zip(
-            self.table("ego_poses").column_names, self.table("ego_poses").columns, strict=True
-        )}
         truth = self.table("ground_truth")
         frames = truth.column("frame").to_numpy()
         ids = truth.column("actor_id").to_numpy()
@@ -110,9 +133,11 @@ class Dataset:
         truncation = projections.column("truncation").to_numpy()
         depth = projections.column("depth").to_numpy()
         in_view = projections.column("in_view").to_numpy(zero_copy_only=False)
+        occlusion = self.table("visibility").column("occlusion").to_numpy()
+        events = self.table("frames").column("events").to_pylist()
         names = self.rig.camera_names
         c = len(names)
-        for row, frame in enumerate(ego["frame"]):
+        for row, (frame, timestamp, pose) in enumerate(self._ego_rows()):
             lo, hi = np.searchsorted(frames, [frame, frame + 1])
             plo, phi = np.searchsorted(proj_frames, [frame, frame + 1])
             n = hi - lo
@@ -126,17 +151,57 @@ class Dataset:
                     truncation=truncation[plo:phi][index::c],
                     depth=depth[plo:phi][index::c],
                     in_view=in_view[plo:phi][index::c],
+                    occlusion=occlusion[plo:phi][index::c],
                 )
                 for index, name in enumerate(names)
             }
             yield GroundTruthFrame(
-                frame=int(frame),
-                timestamp=float(ego["timestamp"][row]),
-                ego=EgoPose(*(float(ego[name][row]) for name in ("x", "y", "z", "yaw", "vx", "vy"))),
+                frame=frame,
+                timestamp=timestamp,
+                ego=pose,
                 actor_ids=ids[lo:hi],
                 classes=classes[lo:hi],
                 boxes=boxes[lo:hi],
                 cameras=per_camera,
+                events=tuple(events[row]),
+            )
+
+    def sensor_frames(self) -> Iterator[SensorFrame]:
+        """What a tracker sees, frame by frame: a :class:`SensorFrame` per frame that was not dropped (a
+        dropped frame is skipped, so the tracker sees the time jump). No ground truth is in it."""
+        frames = self.table("frames")
+        dropped = frames.column("dropped").to_numpy(zero_copy_only=False)
+        table = self.table("detections")
+        det_frames = table.column("frame").to_numpy()
+        cameras = np.asarray(table.column("camera").to_pylist(), dtype=object)
+        boxes2d = _stack(table, BOX2D_FIELDS)
+        boxes3d = _stack(table, BOX3D_FIELDS)
+        scores = table.column("score").to_numpy()
+        labels = table.column("label").to_pylist()
+        embedding_column = table.column("embedding").combine_chunks()
+        flat = embedding_column.flatten().to_numpy(zero_copy_only=False)
+        offsets = embedding_column.offsets.to_numpy()
+        rig = self.rig
+        for row, (frame, timestamp, pose) in enumerate(self._ego_rows()):
+            if dropped[row]:
+                continue
+            lo, hi = np.searchsorted(det_frames, [frame, frame + 1])
+            per_camera: dict[str, list[Detection]] = {name: [] for name in rig.camera_names}
+            for i in range(lo, hi):
+                box3d = None if np.isnan(boxes3d[i, 0]) else Box3D(*boxes3d[i].tolist())
+                per_camera[cameras[i]].append(Detection(
+                    box=Box2D(*boxes2d[i].tolist()),
+                    score=float(scores[i]),
+                    label=ActorClass(labels[i]),
+                    box3d=box3d,
+                    embedding=flat[offsets[i]:offsets[i + 1]] if offsets[i + 1] > offsets[i] else None,
+                ))
+            yield SensorFrame(
+                frame=frame,
+                timestamp=timestamp,
+                ego=pose,
+                rig=rig,
+                detections={name: tuple(items) for name, items in per_camera.items()},
             )
 
     def summary(self) -> str:
@@ -152,6 +217,13 @@ class Dataset:
             class_counts = dict(zip(names.tolist(), counts.tolist(), strict=True))
         per_frame = np.bincount(truth.column("frame").to_numpy(), minlength=self.frame_count)
         visible = projections.column("in_view").to_numpy(zero_copy_only=False)
+        sensor_truth = self.table("sensor_truth")
+        truth_actor = sensor_truth.column("actor_id").to_numpy()
+        truth_detection = sensor_truth.column("detection").to_numpy()
+        clutter = int(np.sum(truth_actor < 0))
+        in_view_pairs = int(visible.sum())
+        missed = in_view_pairs - int(np.sum((truth_actor >= 0) & (truth_detection >= 0)))
+        dropped = int(self.table("frames").column("dropped").to_numpy(zero_copy_only=False).sum())
         scenario = self.scenario
         event_text = ", ".join(f"{event['event']} at frame {event['frame']}" for event in self.manifest["events"])
         lines = [
@@ -165,6 +237,9 @@ class Dataset:
             f"rig       {self.rig.name}: {', '.join(self.rig.camera_names)}",
             f"rows      ground_truth {len(truth)}, projections {len(projections)} "
             f"({int(visible.sum())} in view)",
+            f"sensor    {self.table('detections').num_rows} detections ({clutter} false positives), "
+            f"{missed} actor-camera pairs in view missed; {dropped} frames dropped; "
+            f"visibility {self.manifest.get('visibility', 'not measured')}",
             f"events    {event_text or 'none'}",
         ]
         return "\n".join(lines)

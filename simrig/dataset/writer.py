@@ -20,8 +20,10 @@ from ..errors import DatasetError, DatasetExistsError
 from .manifest import (
     FORMAT_NAME,
     FORMAT_VERSION,
+    IMAGES_FOLDER,
     MANIFEST_NAME,
     file_sha256,
+    folder_digest,
     read_manifest,
     write_json_atomic,
 )
@@ -58,6 +60,13 @@ def check_output_folder(out: Path, *, overwrite: bool) -> None:
             f"output folder {str(out)!r} is not empty and holds no simrig dataset; "
             "choose another folder or pass --overwrite to replace it"
         )
+
+
+def _concatenate(chunks: list, arrow_type: pa.DataType) -> pa.Array:
+    """One Arrow column from per-frame chunks (numpy arrays, or Arrow arrays for list columns)."""
+    if isinstance(chunks[0], pa.Array):
+        return pa.concat_arrays([chunk.cast(arrow_type) for chunk in chunks])
+    return pa.array(np.concatenate(chunks), type=arrow_type)
 
 
 class DatasetWriter:
@@ -110,15 +119,20 @@ class DatasetWriter:
         """A JSON side file (e.g. ``rig.json``) in the dataset folder."""
         write_json_atomic(self.partial / filename, data)
 
+    def write_image(self, relative: str, image: np.ndarray) -> None:
+        """An RGB ``(H, W, 3)`` uint8 image as PNG at ``relative`` (e.g. ``images/CAM_FRONT/000012.png``)."""
+        from PIL import Image
+
+        path = self.partial / relative
+        path.parent.mkdir(parents=True, exist_ok=True)
+        Image.fromarray(image).save(path, format="PNG")
+
     def _flush(self) -> None:
         for name, chunks in self._buffers.items():
             schema = SCHEMAS[name]
             if not chunks:
                 continue
-            arrays = [
-                pa.array(np.concatenate([chunk[field.name] for chunk in chunks]), type=field.type)
-                for field in schema
-            ]
+            arrays = [_concatenate([chunk[field.name] for chunk in chunks], field.type) for field in schema]
             table = pa.Table.from_arrays(arrays, schema=schema)
             if name not in self._writers:
                 self._writers[name] = pq.ParquetWriter(self.partial / f"{name}.parquet", schema)
@@ -144,11 +158,16 @@ class DatasetWriter:
         self._writers.clear()
         files = {}
         for path in sorted(self.partial.iterdir()):
+            if path.is_dir():
+                continue
             entry = {"file": path.name, "sha256": file_sha256(path)}
             if path.stem in self._rows:
                 entry["rows"] = self._rows[path.stem]
             files[path.stem] = entry
         full = {"format": FORMAT_NAME, "format_version": FORMAT_VERSION, **manifest, "files": files}
+        images = self.partial / IMAGES_FOLDER
+        if images.is_dir():
+            full["images"] = folder_digest(images)
         full.pop("complete", None)
         full["complete"] = True
         write_json_atomic(self.partial / MANIFEST_NAME, full)

@@ -21,9 +21,12 @@ from __future__ import annotations
 import gymnasium as gym
 import highway_env  # noqa: F401  (registers the environments)
 import numpy as np
+from highway_env.road.lane import LineType, StraightLane
 
+from scenarios.perturbation_schema import CutIn, Occluder
 from scenarios.schema import TrafficConfig
 
+from ..render.road import RoadMarkings
 from ..types import ActorClass, EgoPose, GroundTruthFrame
 from .vehicles import VEHICLE_TYPES, SimrigVehicle
 
@@ -34,7 +37,9 @@ SPAWN_ATTEMPTS = 30
 EGO_CLASS = ActorClass.CAR
 
 _ENV_CONFIG = {
-    "highway-v0": lambda cfg: {"lanes_count": cfg.lanes, "vehicles_count": 0, "controlled_vehicles": 1},
+    "highway-v0": lambda cfg: {
+        "lanes_count": cfg.lanes, "vehicles_count": 0, "controlled_vehicles": 1, "initial_lane_id": cfg.ego_lane,
+    },
     "merge-v0": lambda cfg: {},
     "roundabout-v0": lambda cfg: {},
     "intersection-v0": lambda cfg: {"spawn_probability": 0.0, "initial_vehicle_count": 0},
@@ -56,8 +61,18 @@ class TrafficWorld:
     (where and which vehicles appear). Both come from the scenario seed (:mod:`simrig.seeding`).
     """
 
-    def __init__(self, config: TrafficConfig, frame_rate_hz: float, *, env_seed: int, rng: np.random.Generator):
+    def __init__(
+        self,
+        config: TrafficConfig,
+        frame_rate_hz: float,
+        *,
+        env_seed: int,
+        rng: np.random.Generator,
+        scripted: tuple[tuple[int, Occluder | CutIn], ...] = (),
+    ):
         self.config = config
+        self._scripted = [(index, script, script.frame_window(frame_rate_hz)) for index, script in scripted]
+        self._script_vehicles: dict[int, SimrigVehicle] = {}
         self.frame_rate_hz = frame_rate_hz
         self._env_seed = env_seed
         self._rng = rng
@@ -109,8 +124,10 @@ class TrafficWorld:
         self._next_id = 0
         self._frame = 0
         self._terminated_reported = False
+        self._script_vehicles = {}
+        events = self._run_scripts()
         self._fill(self.config.initial_clearance_m)
-        return self._state(())
+        return self._state(tuple(events))
 
     def step(self) -> GroundTruthFrame:
         """Advance one frame (1 / frame rate seconds) and keep the traffic window at its density."""
@@ -126,6 +143,7 @@ class TrafficWorld:
             self._terminated_reported = True
             events.append("env_terminated")
         self._remove_far()
+        events.extend(self._run_scripts())
         self._fill(self.config.spawn_min_distance_m)
         return self._state(tuple(events))
 
@@ -185,6 +203,82 @@ class TrafficWorld:
             road.vehicles.append(vehicle)
             return True
         return False
+
+    # ------------------------------------------------------------------ scripted vehicles
+    def _run_scripts(self) -> list[str]:
+        """Spawn, steer and remove the vehicles of ``occluder`` and ``cut_in`` perturbations at this frame."""
+        events = []
+        road = self.env.unwrapped.road
+        for index, script, (first, last) in self._scripted:
+            name = f"{script.kind}#{index}"
+            vehicle = self._script_vehicles.get(index)
+            if self._frame == first:
+                vehicle, event = self._spawn_scripted(script, name)
+                self._script_vehicles[index] = vehicle
+                events.append(event)
+            if vehicle is None or vehicle not in road.vehicles:
+                continue
+            if isinstance(script, CutIn) and self._frame == last:
+                vehicle.target_lane_index = (*vehicle.lane_index[:2], self.ego.lane_index[2])
+                events.append(f"{name} changes into the ego's lane id={vehicle.simrig_id}")
+            if isinstance(script, Occluder) and self._frame == last + 1:
+                road.vehicles.remove(vehicle)
+                events.append(f"{name} removed id={vehicle.simrig_id}")
+        return events
+
+    def _spawn_scripted(self, script: Occluder | CutIn, name: str) -> tuple[SimrigVehicle, str]:
+        """Place a scripted vehicle ``lane_offset`` lanes beside the ego (mirrored to the other side if the
+        road has no lane there) and ``offset_m`` along the road; vehicles in its way are removed."""
+        road = self.env.unwrapped.road
+        start, end, ego_lane = self.ego.lane_index
+        lanes = road.network.graph[start][end]
+        note = ""
+        lane_id = ego_lane - script.lane_offset  # highway-env numbers lanes from the left
+        if not 0 <= lane_id < len(lanes):
+            lane_id = ego_lane + script.lane_offset
+            note = " (mirrored: no lane on the requested side)"
+            if not 0 <= lane_id < len(lanes):
+                raise ValueError(f"{name}: the road has no lane {script.lane_offset:+d} from the ego's on either side")
+        lane = lanes[lane_id]
+        s = lane.local_coordinates(self.ego.position)[0] + script.offset_m
+        position, heading = lane.position(s, 0.0), lane.heading_at(s)
+        vehicle_type = VEHICLE_TYPES[ActorClass(script.actor_class)]
+        others = self._others()
+        in_way = [
+            v for v in others
+            if _blocked(position, heading, vehicle_type, v.position[None, :], np.array([[v.LENGTH / 2, v.WIDTH / 2]]))
+        ]
+        road.vehicles = [v for v in road.vehicles if v not in in_way]
+        speed = self.ego.target_speed + script.relative_speed_mps
+        vehicle = vehicle_type(
+            road, position, heading=heading, speed=speed, target_lane_index=(start, end, lane_id), target_speed=speed
+        )
+        vehicle.enable_lane_change = False
+        vehicle.simrig_id = self._next_id
+        self._next_id += 1
+        road.vehicles.append(vehicle)
+        removed = f", removed {len(in_way)} in its way" if in_way else ""
+        return vehicle, f"{name} spawned id={vehicle.simrig_id} lane {lane_id}{note}{removed}"
+
+    def road_markings(self) -> RoadMarkings:
+        """The painted lines of the road network in the world frame (for colour renders and plots).
+
+        Straight lanes give two-point lines; curved ones are sampled every 2 m. Call after :meth:`reset`.
+        """
+        lines, dashed = [], []
+        for lane in self.env.unwrapped.road.network.lanes_list():
+            length = lane.length
+            samples = np.array([0.0, length]) if isinstance(lane, StraightLane) else np.linspace(
+                0.0, length, max(2, int(np.ceil(length / 2.0)) + 1)
+            )
+            for side, line_type in zip((-0.5, 0.5), lane.line_types, strict=True):
+                if line_type == LineType.NONE:
+                    continue
+                points = np.array([lane.position(s, side * lane.width_at(s)) for s in samples])
+                lines.append(np.stack([points[:, 0], -points[:, 1]], axis=1))  # world: Y = −y
+                dashed.append(line_type == LineType.STRIPED)
+        ego = self.ego.position
+        return RoadMarkings(tuple(lines), tuple(dashed), centre=(float(ego[0]), float(-ego[1])))
 
     # ------------------------------------------------------------------ ground truth
     def _state(self, events: tuple[str, ...]) -> GroundTruthFrame:

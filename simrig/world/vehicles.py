@@ -12,33 +12,15 @@ v·Δv / (2·sqrt(a·b))``, so a car behind a 12 m bus keeps the same bumper gap
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from highway_env.vehicle.behavior import IDMVehicle
 
+from ..classes import CLASS_SPECS
 from ..types import ActorClass
 
 JAM_GAP_M = 5.0
 """[m] IDM jam distance between bumpers (highway-env's default for its 5 m cars)."""
 
-
-@dataclass(frozen=True)
-class ClassSpec:
-    """Physical size of an actor class: length, width, height [m]."""
-
-    length: float
-    width: float
-    height: float
-
-
-CLASS_SPECS: dict[ActorClass, ClassSpec] = {
-    ActorClass.CAR: ClassSpec(4.6, 1.9, 1.6),
-    ActorClass.TRUCK: ClassSpec(10.0, 2.5, 3.6),
-    ActorClass.BUS: ClassSpec(12.0, 2.55, 3.2),
-    ActorClass.MOTORCYCLE: ClassSpec(2.2, 0.8, 1.5),
-}
-"""Footprints and heights per class (typical European values; nuScenes' mean car is 4.6 × 1.9 × 1.7 m)."""
 
 _IDM_CONSTANTS = {
     "ACC_MAX": 6.0,  # [m/s²]

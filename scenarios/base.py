@@ -1,0 +1,22 @@
+"""Shared pieces of the scenario schema: the strict base model and constrained number types."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field
+
+PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+NonNegativeFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+
+
+class Strict(BaseModel):
+    """Base model: unknown keys are errors, values are immutable once validated."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=False)
+
+
+def set_keys(model: BaseModel) -> set[str]:
+    """The keys the scenario file actually set (not defaults)."""
+    return set(model.model_fields_set)

@@ -1,0 +1,1 @@
+"""The detector model: per camera, what an imperfect detector reports and why (see :mod:`.model`)."""

@@ -1,0 +1,282 @@
+"""The detector model as small effects, each with one job, applied in order to a :class:`.batch.CameraBatch`.
+
+An effect is an object with ``apply(batch)``; random effects draw from their own stream per camera
+(``RandomStreams.generator("sensor", effect_key, camera_index)``), so changing one effect's parameters never
+changes another effect's draws. :func:`simrig.sensor.model.build_effects` puts them in order:
+visibility-based probability, scheduled perturbations, the detection draw, then the outputs of detected
+actors (2D box, 3D estimate, score, embedding) and finally clutter.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+
+from scenarios.sensor_schema import (
+    Box2DNoiseConfig,
+    Box3DNoiseConfig,
+    ClutterConfig,
+    DetectionConfig,
+    EmbeddingConfig,
+    ScoreConfig,
+)
+
+from ..classes import CLASS_SPECS
+from ..seeding import RandomStreams
+from ..types import ActorClass
+from .batch import CameraBatch
+from .causes import Cause
+
+
+class SensorEffect(Protocol):
+    def apply(self, batch: CameraBatch) -> None:
+        """Read and update ``batch`` in place."""
+
+
+class _Random:
+    """Per-camera random streams of one effect (``stream_key`` is fixed per effect class; never renumber)."""
+
+    stream_key: int = -1
+
+    def __init__(self, streams: RandomStreams):
+        self._streams = streams
+        self._generators: dict[int, np.random.Generator] = {}
+
+    def rng(self, camera_index: int) -> np.random.Generator:
+        if camera_index not in self._generators:
+            self._generators[camera_index] = self._streams.generator("sensor", self.stream_key, camera_index)
+        return self._generators[camera_index]
+
+
+def ramp(value: np.ndarray, zero_at: float, one_at: float) -> np.ndarray:
+    """Linear ramp from 0 at ``zero_at`` to 1 at ``one_at`` (either order), clipped to [0, 1].
+
+    >>> ramp(np.array([0.0, 0.3, 1.0]), 0.1, 0.5).round(2).tolist()
+    [0.0, 0.5, 1.0]
+    >>> ramp(np.array([50.0, 80.0, 120.0]), 100.0, 60.0).round(2).tolist()
+    [1.0, 0.5, 0.0]
+    """
+    return np.clip((np.asarray(value, dtype=float) - zero_at) / (one_at - zero_at), 0.0, 1.0)
+
+
+class DetectionProbability:
+    """p = p_max · ramp(visible fraction) · ramp(truncation) · ramp(distance); 0 out of view. Marks the
+    causes that lowered p: ``occluded``, ``truncated``, ``far``, ``out_of_view``."""
+
+    def __init__(self, config: DetectionConfig):
+        self.config = config
+
+    def apply(self, batch: CameraBatch) -> None:
+        c = self.config
+        g_visible = ramp(batch.visible_fraction, c.min_visible_fraction, c.full_visible_fraction)
+        g_truncation = ramp(np.nan_to_num(batch.truncation, nan=1.0), c.max_truncation, c.full_truncation)
+        g_distance = ramp(batch.distance, c.max_range_m, c.full_range_m)
+        in_view = batch.in_view
+        p = c.probability * g_visible * g_truncation * g_distance
+        batch.probability = batch.probability * np.where(in_view, p, 0.0)
+        batch.causes |= np.where(~in_view, int(Cause.OUT_OF_VIEW), 0)
+        batch.causes |= np.where(in_view & (g_visible < 1.0), int(Cause.OCCLUDED), 0)
+        batch.causes |= np.where(in_view & (g_truncation < 1.0), int(Cause.TRUNCATED), 0)
+        batch.causes |= np.where(in_view & (g_distance < 1.0), int(Cause.FAR), 0)
+
+
+class DetectionDraw(_Random):
+    """``detected`` = a Bernoulli draw with each actor's probability (one draw per actor, always)."""
+
+    stream_key = 0
+
+    def apply(self, batch: CameraBatch) -> None:
+        draws = self.rng(batch.camera_index).random(len(batch))
+        batch.detected = (draws < batch.probability) & ~batch.silenced
+
+
+class Box2DNoise(_Random):
+    """Each edge of a detected box moves by N(0, (k · size · noise factor)²), size the true box's width for
+    x1, x2 and height for y1, y2; the result is ordered and clipped to the image."""
+
+    stream_key = 1
+
+    def __init__(self, config: Box2DNoiseConfig, streams: RandomStreams):
+        super().__init__(streams)
+        self.config = config
+
+    def apply(self, batch: CameraBatch) -> None:
+        noise = self.rng(batch.camera_index).standard_normal((len(batch), 4))
+        boxes = batch.boxes2d
+        size = np.stack([boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1]], axis=1)[:, [0, 1, 0, 1]]
+        sigma = self.config.relative_sigma * size * batch.noise_factor[:, None]
+        noisy = boxes + noise * sigma
+        x = np.sort(noisy[:, [0, 2]], axis=1).clip(0.0, batch.camera.width)
+        y = np.sort(noisy[:, [1, 3]], axis=1).clip(0.0, batch.camera.height)
+        out = np.stack([x[:, 0], y[:, 0], x[:, 1], y[:, 1]], axis=1)
+        batch.det_boxes2d = np.where(batch.detected[:, None], out, np.nan)
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    """Angles wrapped to [−π, π)."""
+    return (angle + np.pi) % (2.0 * np.pi) - np.pi
+
+
+class Monocular3D(_Random):
+    """A monocular 3D estimate in the world frame. In the camera frame the box centre moves along its ray
+    by N(0, σ(d)²), σ(d) = a + b·d with d its range [m], and across the ray by N(0, σ_lat²) in two
+    directions; sizes are scaled by 1 + N(0, σ_s²); yaw gets N(0, σ_yaw²) and flips by 180° with the
+    configured probability; velocity gets N(0, σ_v²) per component. All σ are multiplied by the actor's
+    noise factor. A calibration yaw offset then rotates centre, yaw and velocity about the vertical axis
+    through the camera (the detector lifts to the world with the wrong extrinsics)."""
+
+    stream_key = 2
+
+    def __init__(self, config: Box3DNoiseConfig, streams: RandomStreams):
+        super().__init__(streams)
+        self.config = config
+
+    def apply(self, batch: CameraBatch) -> None:
+        c = self.config
+        n = len(batch)
+        rng = self.rng(batch.camera_index)
+        depth_noise, lateral_noise = rng.standard_normal(n), rng.standard_normal((n, 2))
+        size_noise, yaw_noise = rng.standard_normal((n, 3)), rng.standard_normal(n)
+        velocity_noise = rng.standard_normal((n, 2))
+        flips = rng.random(n) < c.yaw_flip_probability
+        factor = batch.noise_factor
+        world_from_camera = batch.world_from_camera
+        camera_centre = world_from_camera[:3, 3]
+        true = batch.boxes3d
+        ray = true[:, :3] - camera_centre  # world-frame ray to the centre [m]
+        distance = np.linalg.norm(ray, axis=1)
+        unit = ray / np.maximum(distance, 1e-9)[:, None]
+        # Two directions across the ray: horizontal (world z × ray) and the one perpendicular to both.
+        across = np.cross(np.array([0.0, 0.0, 1.0]), unit)
+        across /= np.maximum(np.linalg.norm(across, axis=1), 1e-9)[:, None]
+        up = np.cross(unit, across)
+        depth = distance + depth_noise * (c.depth_sigma_m + c.depth_sigma_per_m * distance) * factor
+        lateral = lateral_noise * c.lateral_sigma_m * factor[:, None]
+        centre = camera_centre + unit * depth[:, None] + across * lateral[:, :1] + up * lateral[:, 1:]
+        out = np.empty_like(true)
+        out[:, :3] = centre
+        out[:, 3:6] = true[:, 3:6] * np.maximum(0.1, 1.0 + size_noise * c.size_sigma * factor[:, None])
+        out[:, 6] = true[:, 6] + yaw_noise * np.radians(c.yaw_sigma_deg) * factor + np.where(flips, np.pi, 0.0)
+        out[:, 7:9] = true[:, 7:9] + velocity_noise * c.velocity_sigma_mps * factor[:, None]
+        if batch.yaw_offset:
+            cos, sin = np.cos(batch.yaw_offset), np.sin(batch.yaw_offset)
+            rotation = np.array([[cos, -sin], [sin, cos]])
+            out[:, :2] = (out[:, :2] - camera_centre[:2]) @ rotation.T + camera_centre[:2]
+            out[:, 7:9] = out[:, 7:9] @ rotation.T
+            out[:, 6] += batch.yaw_offset
+        out[:, 6] = _wrap(out[:, 6])
+        batch.det_boxes3d = np.where(batch.detected[:, None], out, np.nan)
+
+
+class Scores(_Random):
+    """score = clip(base + gain · q + N(0, σ²), floor, 1), q = visible fraction · (1 − truncation)."""
+
+    stream_key = 3
+
+    def __init__(self, config: ScoreConfig, streams: RandomStreams):
+        super().__init__(streams)
+        self.config = config
+
+    def apply(self, batch: CameraBatch) -> None:
+        c = self.config
+        quality = batch.visible_fraction * (1.0 - np.nan_to_num(batch.truncation, nan=1.0))
+        noise = self.rng(batch.camera_index).standard_normal(len(batch)) * c.sigma
+        scores = np.clip(c.base + c.gain * quality + noise, c.floor, 1.0)
+        batch.scores = np.where(batch.detected, scores, np.nan)
+
+
+def _unit_rows(vectors: np.ndarray) -> np.ndarray:
+    return vectors / np.maximum(np.linalg.norm(vectors, axis=-1, keepdims=True), 1e-12)
+
+
+class Embeddings(_Random):
+    """Appearance: identity vector (a fixed random unit vector per actor id, from the ``embeddings``
+    stream) plus a Gaussian vector of norm ≈ σ = (sigma + occlusion_sigma · occlusion) · noise factor,
+    renormalised. float32, ``dimension`` long."""
+
+    stream_key = 4
+
+    def __init__(self, config: EmbeddingConfig, streams: RandomStreams):
+        super().__init__(streams)
+        self.config = config
+        self._identity: dict[int, np.ndarray] = {}
+
+    def identity(self, actor_id: int) -> np.ndarray:
+        """The noise-free unit embedding of ``actor_id`` (same for every camera and frame)."""
+        if actor_id not in self._identity:
+            vector = self._streams.generator("embeddings", int(actor_id)).standard_normal(self.config.dimension)
+            self._identity[actor_id] = _unit_rows(vector)
+        return self._identity[actor_id]
+
+    def apply(self, batch: CameraBatch) -> None:
+        c = self.config
+        n, d = len(batch), c.dimension
+        noise = self.rng(batch.camera_index).standard_normal((n, d)) / np.sqrt(d)
+        sigma = (c.sigma + c.occlusion_sigma * (1.0 - batch.visible_fraction)) * batch.noise_factor
+        identity = np.array([self.identity(i) for i in batch.actor_ids]).reshape(n, d)
+        embeddings = _unit_rows(identity + noise * sigma[:, None]).astype(np.float32)
+        batch.embeddings = np.where(batch.detected[:, None], embeddings, np.float32(np.nan))
+
+
+class Clutter(_Random):
+    """False positives: Poisson(rate) boxes per camera and frame anywhere in the image, classes drawn from the
+    traffic's class mix, scores uniform in ``score_range``, a 3D estimate on the box centre's ray at a range
+    uniform in ``depth_range_m`` with the class's size and the ego's heading, and a random unit embedding."""
+
+    stream_key = 5
+
+    def __init__(self, config: ClutterConfig, class_mix: dict[str, float], embedding_dimension: int,
+                 streams: RandomStreams):
+        super().__init__(streams)
+        self.config = config
+        self.classes = np.array(list(class_mix), dtype=object)
+        weights = np.array(list(class_mix.values()), dtype=float)
+        self.weights = weights / weights.sum()
+        self.dimension = embedding_dimension
+
+    def apply(self, batch: CameraBatch) -> None:
+        c = self.config
+        rng = self.rng(batch.camera_index)
+        count = int(rng.poisson(c.rate_per_frame))
+        camera = batch.camera
+        height = np.exp(rng.uniform(*np.log(c.height_range_px), count))
+        width = height * rng.uniform(*c.aspect_range, count)
+        centre = np.stack([rng.uniform(0, camera.width, count), rng.uniform(0, camera.height, count)], axis=1)
+        labels = self.classes[rng.choice(len(self.classes), size=count, p=self.weights)]
+        scores = rng.uniform(*c.score_range, count)
+        ranges = rng.uniform(*c.depth_range_m, count)
+        embeddings = _unit_rows(rng.standard_normal((count, self.dimension))).astype(np.float32)
+        if batch.silenced:
+            count = 0
+        boxes = np.stack([
+            np.clip(centre[:, 0] - width / 2, 0, camera.width), np.clip(centre[:, 1] - height / 2, 0, camera.height),
+            np.clip(centre[:, 0] + width / 2, 0, camera.width), np.clip(centre[:, 1] + height / 2, 0, camera.height),
+        ], axis=1)
+        rays = np.stack([(centre[:, 0] - camera.cx) / camera.fx, (centre[:, 1] - camera.cy) / camera.fy,
+                         np.ones(len(centre))], axis=1)
+        rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+        points = rays * ranges[:, None] @ batch.world_from_camera[:3, :3].T + batch.world_from_camera[:3, 3]
+        sizes = np.array([[CLASS_SPECS[ActorClass(name)].length, CLASS_SPECS[ActorClass(name)].width,
+                           CLASS_SPECS[ActorClass(name)].height] for name in labels]).reshape(-1, 3)
+        boxes3d = np.concatenate([points, sizes, np.full((len(points), 1), batch.context.ego_yaw),
+                                  np.zeros((len(points), 2))], axis=1)
+        batch.clutter = {
+            "boxes2d": boxes[:count], "boxes3d": boxes3d[:count], "scores": scores[:count],
+            "labels": labels[:count], "embeddings": embeddings[:count],
+        }
+
+
+class DetectionOrder(_Random):
+    """Numbers each camera's detections (detected actors and clutter) in a random order, so that a tracker
+    cannot tell clutter or identity from the position of a detection in the list."""
+
+    stream_key = 6
+
+    def apply(self, batch: CameraBatch) -> None:
+        detected = np.nonzero(batch.detected)[0]
+        clutter = len(batch.clutter.get("scores", ()))
+        order = self.rng(batch.camera_index).permutation(len(detected) + clutter)
+        batch.detection_index = np.full(len(batch), -1, dtype=np.int64)
+        batch.detection_index[detected] = order[: len(detected)]
+        batch.clutter_index = order[len(detected):].astype(np.int64)
