@@ -43,8 +43,8 @@ def test_a_scheduled_occlusion_hides_the_actor_in_its_window_and_says_why(pertur
     frames = truth.column("frame").to_numpy()
     detection = truth.column("detection").to_numpy()
     causes = truth.column("causes").to_pylist()
-    in_view = {(f, c) for f, c, s in zip(visibility.column("frame").to_pylist(), visibility.column("camera").to_pylist(),
-                                         visibility.column("silhouette_px").to_pylist(), strict=True) if s > 0}
+    columns = (visibility.column(name).to_pylist() for name in ("frame", "camera", "silhouette_px"))
+    in_view = {(f, c) for f, c, s in zip(*columns, strict=True) if s > 0}
     cameras = truth.column("camera").to_pylist()
     window = (frames >= 20) & (frames <= 40)
     seen_in_window = [i for i in np.nonzero(window)[0] if (frames[i], cameras[i]) in in_view]
