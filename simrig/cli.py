@@ -48,12 +48,14 @@ def _cmd_generate(args: argparse.Namespace) -> int:
         out=args.out,
         frames=args.frames,
         overwrite=args.overwrite,
+        images=args.images,
         progress=not args.quiet,
     )
     print(Dataset.open(result.path).summary())
     times = result.times
     print(
         f"time      {times.total:.1f} s: traffic {times.traffic:.1f} s, projection {times.projection:.1f} s, "
+        f"visibility {times.visibility:.1f} s, sensor {times.sensor:.1f} s, images {times.images:.1f} s, "
         f"writing {times.writing:.1f} s ({result.manifest['frames'] / times.total:.1f} frames/s)"
     )
     for event in result.manifest["events"]:
@@ -86,6 +88,14 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_render(args: argparse.Namespace) -> int:
+    from .mosaic import render_mosaic
+
+    out = args.out or Path(args.dataset) / f"mosaic_{args.frame:06d}.png"
+    print(render_mosaic(args.dataset, args.frame, out))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _OneLineParser(
         prog="simrig", description="A test bench for multi-camera multi-object trackers on moving vehicles."
@@ -100,6 +110,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="frames to generate (default: the scenario's)")
     gen.add_argument("--out", type=Path, required=True, help="output dataset folder")
     gen.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in --out")
+    gen.add_argument("--images", action="store_true", help="also write a PNG per camera and frame (slow)")
     gen.add_argument("--quiet", action="store_true", help="no progress bar")
     gen.set_defaults(run=_cmd_generate)
 
@@ -110,6 +121,11 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("dataset", type=Path)
     info.add_argument("--verify", action="store_true", help="also check every file's SHA-256")
     info.set_defaults(run=_cmd_info)
+    render = commands.add_parser("render", help="a mosaic PNG of every camera and a bird's-eye view of one frame")
+    render.add_argument("dataset", type=Path)
+    render.add_argument("--frame", type=_int_at_least(0), required=True, help="frame index")
+    render.add_argument("--out", type=Path, default=None, help="PNG path (default: DIR/mosaic_FRAME.png)")
+    render.set_defaults(run=_cmd_render)
     return parser
 
 

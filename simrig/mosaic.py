@@ -1,0 +1,164 @@
+"""``simrig render DIR --frame N``: one PNG with every camera's image, ground-truth and detection boxes
+coloured by identity, and a bird's-eye panel of the same frame.
+
+Camera images come from the dataset's ``images/`` when it was generated with ``--images``; otherwise they
+are rendered now from the stored ground truth and road (same scene, same pixels as ``--images`` gives).
+Solid boxes are ground truth, dashed boxes detections (coloured by the actor that caused them; red for
+false positives).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pyarrow.compute as pc  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.patches import Polygon, Rectangle  # noqa: E402
+
+from .dataset import Dataset  # noqa: E402
+from .errors import DatasetError  # noqa: E402
+from .geometry import box_corners  # noqa: E402
+from .render.road import RoadMarkings, dash_segments  # noqa: E402
+from .types import GroundTruthFrame  # noqa: E402
+
+SURROUND_LAYOUT = (("CAM_FRONT_LEFT", "CAM_FRONT", "CAM_FRONT_RIGHT"), ("CAM_BACK_LEFT", "CAM_BACK", "CAM_BACK_RIGHT"))
+"""nuScenes' usual arrangement of the six surround images."""
+BEV_RANGE_M = 60.0
+"""[m] half side of the bird's-eye panel around the ego."""
+CLUTTER_COLOUR = (0.9, 0.1, 0.1)
+
+
+def identity_colour(actor_id: int) -> tuple[float, float, float]:
+    """A stable colour per actor id (tab20)."""
+    return plt.cm.tab20(int(actor_id) % 20)[:3]
+
+
+def _layout(names: tuple[str, ...]) -> list[list[str]]:
+    if set(names) == {name for row in SURROUND_LAYOUT for name in row}:
+        return [list(row) for row in SURROUND_LAYOUT]
+    columns = 1 if len(names) <= 2 else min(3, len(names))  # a stereo pair: one above the other
+    return [list(names[i:i + columns]) for i in range(0, len(names), columns)]
+
+
+def _camera_images(dataset: Dataset, state: GroundTruthFrame) -> dict[str, np.ndarray]:
+    images = dataset.path / "images"
+    if images.is_dir():
+        from PIL import Image
+
+        names = dataset.rig.camera_names
+        return {name: np.asarray(Image.open(images / name / f"{state.frame:06d}.png")) for name in names}
+    from .render.scene import RigScene
+
+    scene = RigScene(_markings(dataset))
+    scene.set_frame(state.ego, state.classes, state.boxes)
+    return {camera.name: scene.colour(camera, dataset.rig, state.ego) for camera in dataset.rig.cameras}
+
+
+def _markings(dataset: Dataset) -> RoadMarkings | None:
+    path = dataset.path / "road.json"
+    if not path.exists():
+        return None
+    return RoadMarkings.from_dict(json.loads(path.read_text(encoding="utf-8")))
+
+
+def _detections(dataset: Dataset, frame: int) -> dict[str, list[tuple[np.ndarray, np.ndarray, int]]]:
+    """Per camera: (pixel box, world box, actor id or −1) of every detection of ``frame``."""
+    detections = dataset.table("detections").filter(pc.equal(pc.field("frame"), frame)).to_pandas()
+    truth = dataset.table("sensor_truth").filter(pc.equal(pc.field("frame"), frame)).to_pandas()
+    truth = truth[truth.detection >= 0]
+    owner = {(row.camera, row.detection): row.actor_id for row in truth.itertuples()}
+    out: dict[str, list] = {}
+    for row in detections.itertuples():
+        box2d = np.array([row.x1, row.y1, row.x2, row.y2])
+        box3d = np.array([row.x, row.y, row.z, row.length, row.width, row.height, row.yaw])
+        out.setdefault(row.camera, []).append((box2d, box3d, int(owner.get((row.camera, row.index), -1))))
+    return out
+
+
+def _box_patch(box: np.ndarray, colour, dashed: bool) -> Rectangle:
+    x1, y1, x2, y2 = box
+    return Rectangle((x1, y1), x2 - x1, y2 - y1, fill=False, edgecolor=colour, linewidth=1.6 if not dashed else 1.2,
+                     linestyle="--" if dashed else "-")
+
+
+def _draw_bev(axis, dataset: Dataset, state: GroundTruthFrame, detections) -> None:
+    ego = state.ego
+    rotation = np.array([[np.cos(-ego.yaw), -np.sin(-ego.yaw)], [np.sin(-ego.yaw), np.cos(-ego.yaw)]])
+
+    def to_ego(points: np.ndarray) -> np.ndarray:
+        return (points - [ego.x, ego.y]) @ rotation.T
+
+    markings = _markings(dataset)
+    if markings is not None:
+        segments = [to_ego(dash_segments(line, dashed).reshape(-1, 2)).reshape(-1, 2, 2)
+                    for line, dashed in zip(markings.lines, markings.dashed, strict=True)]
+        segments = np.concatenate(segments) if segments else np.zeros((0, 2, 2))
+        a, b = segments[:, 0], segments[:, 1]
+        step = b - a
+        t = np.clip(-np.einsum("ij,ij->i", a, step) / np.maximum(np.einsum("ij,ij->i", step, step), 1e-12), 0, 1)
+        near = np.abs(a + t[:, None] * step).max(axis=1) < 1.5 * BEV_RANGE_M  # closest point to the ego
+        axis.add_collection(LineCollection(segments[near], colors="0.7", linewidths=0.8))
+    for actor_id, corners in zip(state.actor_ids, box_corners(state.boxes)[:, :4, :2], strict=True):
+        axis.add_patch(Polygon(to_ego(corners), closed=True, facecolor=identity_colour(actor_id), alpha=0.55,
+                               edgecolor=identity_colour(actor_id)))
+        centre = to_ego(corners.mean(axis=0, keepdims=True))[0]
+        if np.abs(centre).max() < BEV_RANGE_M:
+            axis.text(*centre, str(actor_id), fontsize=6, ha="center", va="center")
+    for items in detections.values():
+        for _, box3d, actor_id in items:
+            colour = CLUTTER_COLOUR if actor_id < 0 else identity_colour(actor_id)
+            corners = to_ego(box_corners(box3d[None])[0, :4, :2])
+            axis.add_patch(Polygon(corners, closed=True, fill=False, edgecolor=colour, linestyle="--", linewidth=0.9))
+    axis.add_patch(Rectangle((-2.3, -0.95), 4.6, 1.9, facecolor="black"))
+    axis.set_xlim(-BEV_RANGE_M, BEV_RANGE_M)
+    axis.set_ylim(-BEV_RANGE_M, BEV_RANGE_M)
+    axis.set_aspect("equal")
+    axis.set_title("bird's-eye (ego frame, x forward, y left) [m]", fontsize=9)
+    axis.tick_params(labelsize=7)
+
+
+def render_mosaic(dataset_path: Path | str, frame: int, out: Path | str) -> Path:
+    """Write the mosaic PNG of ``frame`` of the dataset at ``dataset_path`` to ``out``; returns ``out``."""
+    dataset = Dataset.open(dataset_path)
+    if not 0 <= frame < dataset.frame_count:
+        raise DatasetError(f"--frame: {frame} is outside the dataset's frames 0 … {dataset.frame_count - 1}")
+    state = next(f for i, f in enumerate(dataset.ground_truth_frames()) if i == frame)
+    images = _camera_images(dataset, state)
+    detections = _detections(dataset, frame)
+    layout = _layout(dataset.rig.camera_names)
+    rows, columns = len(layout), max(len(row) for row in layout)
+    camera = dataset.rig.cameras[0]
+    aspect = camera.height / camera.width
+    panel = 4.2 if columns > 1 else 8.0  # [in] width of one camera image
+    height = max(5.0, panel * aspect * rows + 0.8)
+    figure = plt.figure(figsize=(panel * columns + height, height), dpi=110)
+    grid = figure.add_gridspec(rows, columns + 1, width_ratios=[panel] * columns + [height])
+    for r, row in enumerate(layout):
+        for c, name in enumerate(row):
+            axis = figure.add_subplot(grid[r, c])
+            axis.imshow(images[name])
+            truth = state.cameras[name]
+            for actor_id, box, in_view in zip(state.actor_ids, truth.boxes, truth.in_view, strict=True):
+                if in_view:
+                    axis.add_patch(_box_patch(box, identity_colour(actor_id), dashed=False))
+            for box2d, _, actor_id in detections.get(name, []):
+                colour = CLUTTER_COLOUR if actor_id < 0 else identity_colour(actor_id)
+                axis.add_patch(_box_patch(box2d, colour, dashed=True))
+            axis.set_title(f"{name}: {int(truth.in_view.sum())} in view, {len(detections.get(name, []))} detections",
+                           fontsize=8)
+            axis.set_axis_off()
+    _draw_bev(figure.add_subplot(grid[:, columns]), dataset, state, detections)
+    scenario = dataset.scenario["name"]
+    figure.suptitle(f"{scenario}, seed {dataset.seed}, frame {frame} (t = {state.timestamp:.1f} s); solid: ground "
+                    "truth, dashed: detections (red: false positives)", fontsize=10)
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(out, bbox_inches="tight")
+    plt.close(figure)
+    return out
