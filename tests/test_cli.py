@@ -63,3 +63,26 @@ def test_complete_output_folder_is_one_line(tmp_path, capsys):
 def test_info_on_a_folder_without_dataset_is_one_line(tmp_path, capsys):
     assert main(["info", str(tmp_path)]) == 2
     assert "no complete simrig dataset" in _error_line(capsys)
+
+
+def test_render_writes_a_mosaic_and_rejects_a_frame_outside_the_dataset(tmp_path, capsys):
+    out = tmp_path / "d"
+    assert main(["generate", "highway_stereo", "--frames", "3", "--out", str(out), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["render", str(out), "--frame", "2", "--out", str(tmp_path / "m.png")]) == 0
+    png = (tmp_path / "m.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
+    assert main(["render", str(out), "--frame", "3"]) == 2
+    assert "--frame: 3 is outside the dataset's frames 0 … 2" in _error_line(capsys)
+
+
+def test_images_are_written_per_camera_and_covered_by_the_manifest(tmp_path, capsys):
+    out = tmp_path / "d"
+    assert main(["generate", "highway_stereo", "--frames", "2", "--out", str(out), "--quiet", "--images"]) == 0
+    assert sorted(p.relative_to(out).as_posix() for p in (out / "images").rglob("*.png")) == [
+        "images/left/000000.png", "images/left/000001.png", "images/right/000000.png", "images/right/000001.png"
+    ]
+    assert main(["info", str(out), "--verify"]) == 0
+    (out / "images" / "left" / "000001.png").write_bytes(b"tampered")
+    assert main(["info", str(out), "--verify"]) == 2
+    assert "images" in _error_line(capsys)

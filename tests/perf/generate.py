@@ -7,8 +7,9 @@ Run explicitly (not part of the test suite)::
 Both sides start from the same populated highway (``highway_surround6``: 40 vehicles, seed 0):
 
 * bare — ``env.step(None)`` on that traffic, nothing else (no window upkeep, projection or writing);
-* generate — the whole of :func:`simrig.generate.generate` (traffic with window upkeep, projection into six
-  cameras, Parquet writing, hashing, manifest).
+* generate — the whole of :func:`simrig.generate.generate` with visibility rendering off (traffic with window
+  upkeep, projection into six cameras, the sensor model, Parquet writing, hashing, manifest). The cost of
+  rendering is measured by ``tests/perf/visibility.py``.
 
 Runs alternate (bare, generate, bare, generate, ...) so that machine noise hits both; the table reports
 medians and the overhead ratio. Target (issue 2): generate adds at most 30% over bare stepping. The table
@@ -26,6 +27,7 @@ import time
 from pathlib import Path
 
 from scenarios import load_scenario
+from scenarios.sensor_schema import RenderConfig
 from simrig.generate import generate
 from simrig.seeding import RandomStreams
 from simrig.world import TrafficWorld
@@ -62,8 +64,9 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     scenario = load_scenario(SCENARIO)
+    scenario = scenario.model_copy(update={"render": RenderConfig(visibility=False)})
 
-    bare, full, traffic, projection, writing, vehicles = [], [], [], [], [], []
+    bare, full, traffic, projection, sensor, writing, vehicles = [], [], [], [], [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         for repeat in range(args.repeats):
             seconds, mean_vehicles = bare_stepping_seconds(scenario, args.frames, args.seed)
@@ -73,6 +76,7 @@ def main() -> int:
             full.append(result.times.total)
             traffic.append(result.times.traffic)
             projection.append(result.times.projection)
+            sensor.append(result.times.sensor + result.times.visibility)
             writing.append(result.times.writing)
 
     steps = args.frames - 1
@@ -81,8 +85,10 @@ def main() -> int:
     overhead = bare_fps / full_fps - 1.0
     per_frame_ms = {name: 1000 * statistics.median(values) / args.frames for name, values in (
         ("traffic (highway-env + window upkeep)", traffic), ("projection (6 cameras)", projection),
-        ("writing (Parquet, hashes, manifest)", writing),
+        ("sensor model (issue 3; no rendering)", sensor), ("writing (Parquet, hashes, manifest)", writing),
     )}
+    foundation_ms = sum(ms for name, ms in per_frame_ms.items() if not name.startswith("sensor"))
+    foundation_overhead = foundation_ms / (1000 / bare_fps) - 1.0
     command = "python tests/perf/generate.py " + " ".join(sys.argv[1:])
     lines = [
         f"# `simrig generate` vs bare highway-env stepping — {SCENARIO}",
@@ -98,8 +104,10 @@ def main() -> int:
         f"| `simrig generate` (everything) | {full_fps:.1f} | {1000 / full_fps:.2f} |",
         *(f"| &nbsp;&nbsp;of which {name} | | {ms:.2f} |" for name, ms in per_frame_ms.items()),
         "",
-        f"Overhead of generate over bare stepping: **{overhead * 100:+.1f}%** (target: at most +30%; "
-        f"{'met' if overhead <= 0.30 else 'MISSED'}).",
+        f"Overhead of generate over bare stepping: **{overhead * 100:+.1f}%** (issue 2's target: at most +30%; "
+        f"{'met' if overhead <= 0.30 else 'MISSED'}). Issue 2's target was set for the foundation alone (traffic, "
+        f"projection, writing: {foundation_overhead * 100:+.1f}%); the sensor model added since then is listed "
+        "separately.",
         "",
     ]
     text = "\n".join(lines)
