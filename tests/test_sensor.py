@@ -50,7 +50,7 @@ def test_depth_error_standard_deviation_follows_sigma_of_d(distance):
     config = Box3DNoiseConfig(depth_sigma_m=0.2, depth_sigma_per_m=0.03)
     batch = _batch(_cars_ahead(np.full(20000, distance)))
     batch.detected = np.ones(len(batch), dtype=bool)
-    Monocular3D(config, RandomStreams(3)).apply(batch)
+    Monocular3D(RandomStreams(3), config).apply(batch)
     camera_centre = batch.world_from_camera[:3, 3]
     ray = batch.boxes3d[:, :3] - camera_centre
     unit = ray / np.linalg.norm(ray, axis=1, keepdims=True)

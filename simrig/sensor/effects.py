@@ -14,12 +14,9 @@ from typing import Protocol
 import numpy as np
 
 from scenarios.sensor_schema import (
-    Box2DNoiseConfig,
-    Box3DNoiseConfig,
     ClutterConfig,
     DetectionConfig,
     EmbeddingConfig,
-    ScoreConfig,
 )
 
 from ..classes import CLASS_SPECS
@@ -39,8 +36,9 @@ class _Random:
 
     stream_key: int = -1
 
-    def __init__(self, streams: RandomStreams):
+    def __init__(self, streams: RandomStreams, config=None):
         self._streams = streams
+        self.config = config
         self._generators: dict[int, np.random.Generator] = {}
 
     def rng(self, camera_index: int) -> np.random.Generator:
@@ -97,10 +95,6 @@ class Box2DNoise(_Random):
 
     stream_key = 1
 
-    def __init__(self, config: Box2DNoiseConfig, streams: RandomStreams):
-        super().__init__(streams)
-        self.config = config
-
     def apply(self, batch: CameraBatch) -> None:
         noise = self.rng(batch.camera_index).standard_normal((len(batch), 4))
         boxes = batch.boxes2d
@@ -127,10 +121,6 @@ class Monocular3D(_Random):
     through the camera (the detector lifts to the world with the wrong extrinsics)."""
 
     stream_key = 2
-
-    def __init__(self, config: Box3DNoiseConfig, streams: RandomStreams):
-        super().__init__(streams)
-        self.config = config
 
     def apply(self, batch: CameraBatch) -> None:
         c = self.config
@@ -174,10 +164,6 @@ class Scores(_Random):
 
     stream_key = 3
 
-    def __init__(self, config: ScoreConfig, streams: RandomStreams):
-        super().__init__(streams)
-        self.config = config
-
     def apply(self, batch: CameraBatch) -> None:
         c = self.config
         quality = batch.visible_fraction * (1.0 - np.nan_to_num(batch.truncation, nan=1.0))
@@ -197,9 +183,8 @@ class Embeddings(_Random):
 
     stream_key = 4
 
-    def __init__(self, config: EmbeddingConfig, streams: RandomStreams):
-        super().__init__(streams)
-        self.config = config
+    def __init__(self, streams: RandomStreams, config: EmbeddingConfig):
+        super().__init__(streams, config)
         self._identity: dict[int, np.ndarray] = {}
 
     def identity(self, actor_id: int) -> np.ndarray:
@@ -228,8 +213,7 @@ class Clutter(_Random):
 
     def __init__(self, config: ClutterConfig, class_mix: dict[str, float], embedding_dimension: int,
                  streams: RandomStreams):
-        super().__init__(streams)
-        self.config = config
+        super().__init__(streams, config)
         self.classes = np.array(list(class_mix), dtype=object)
         weights = np.array(list(class_mix.values()), dtype=float)
         self.weights = weights / weights.sum()

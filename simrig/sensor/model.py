@@ -60,15 +60,15 @@ class SensorModel:
                 effect = PERTURBATION_EFFECTS[type(config)](config, index, rig, rate)
             (occlusions if isinstance(effect, ScheduledOcclusion) else others).append(effect)
             self.scheduled.append(effect)
-        self.embeddings = Embeddings(sensor.embedding, streams)
+        self.embeddings = Embeddings(streams, sensor.embedding)
         self.effects: list[SensorEffect] = [
             *occlusions,  # before the probability: they set the visible fraction
             DetectionProbability(sensor.detection),
             *others,
             DetectionDraw(streams),
-            Box2DNoise(sensor.box2d, streams),
-            Monocular3D(sensor.box3d, streams),
-            Scores(sensor.score, streams),
+            Box2DNoise(streams, sensor.box2d),
+            Monocular3D(streams, sensor.box3d),
+            Scores(streams, sensor.score),
             self.embeddings,
             Clutter(sensor.clutter, scenario.traffic.class_mix, sensor.embedding.dimension, streams),
             DetectionOrder(streams),
