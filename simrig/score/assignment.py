@@ -42,3 +42,20 @@ def contested(pair_gt: np.ndarray, pair_tracker: np.ndarray) -> np.ndarray:
     gt_uses = np.bincount(pair_gt)[pair_gt]
     tracker_uses = np.bincount(pair_tracker)[pair_tracker]
     return (gt_uses > 1) | (tracker_uses > 1)
+
+
+def minimum_cost_matching(costs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows and columns of a minimum-cost assignment over the finite entries of ``costs`` (NaN: not allowed),
+    as py-motmetrics solves it: forbidden entries get a cost so large that the most pairs are matched first,
+    then the total cost is minimised.
+
+    >>> minimum_cost_matching(np.array([[1.0, np.nan], [0.5, 1.5]]))
+    (array([0, 1]), array([0, 1]))
+    """
+    valid = np.isfinite(costs)
+    if not valid.any():
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    large = 2 * min(costs.shape) * (np.abs(costs[valid]).max() + 1) + 1
+    rows, cols = linear_sum_assignment(np.where(valid, costs, large))
+    keep = valid[rows, cols]
+    return rows[keep], cols[keep]
