@@ -96,6 +96,30 @@ def _cmd_render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_score(args: argparse.Namespace) -> int:
+    from .score import score
+
+    report = score(args.dataset, args.tracks, lookback_s=args.lookback)
+    print(report.table())
+    if args.json is not None:
+        report.write_json(args.json)
+        print(f"wrote {args.json}")
+    if args.errors is not None:
+        report.write_errors(args.errors)
+        print(f"wrote {args.errors} ({report.errors.num_rows} errors with their causes)")
+    return 0
+
+
+def _non_negative_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not value >= 0.0:
+        raise argparse.ArgumentTypeError(f"must be ≥ 0, got {text}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _OneLineParser(
         prog="simrig", description="A test bench for multi-camera multi-object trackers on moving vehicles."
@@ -126,6 +150,16 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--frame", type=_int_at_least(0), required=True, help="frame index")
     render.add_argument("--out", type=Path, default=None, help="PNG path (default: DIR/mosaic_FRAME.png)")
     render.set_defaults(run=_cmd_render)
+
+    scorer = commands.add_parser("score", help="score a tracker's output (tracks folder or file) on a dataset")
+    scorer.add_argument("dataset", type=Path)
+    scorer.add_argument("tracks", type=Path, help="folder with tracks3d.parquet / tracks2d.parquet, or one file")
+    scorer.add_argument("--json", type=Path, default=None, help="also write every metric as JSON here")
+    scorer.add_argument("--errors", type=Path, default=None,
+                        help="also write every FN / IDS / FRAG with its causes as Parquet here")
+    scorer.add_argument("--lookback", type=_non_negative_float, default=1.0,
+                        help="[s] an ID switch is also tagged with the causes this long before it (default 1)")
+    scorer.set_defaults(run=_cmd_score)
     return parser
 
 

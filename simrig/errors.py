@@ -11,3 +11,7 @@ class DatasetError(SimrigError):
 
 class DatasetExistsError(DatasetError):
     """The output folder already holds a complete dataset and overwriting was not asked for."""
+
+
+class TracksError(SimrigError):
+    """A tracks file is missing, malformed, or does not fit the dataset it is scored against."""

@@ -4,3 +4,9 @@
 distance): the nuScenes AMOTA family and MUTR3D's velocity errors. Every FN, IDS and FRAG is tagged with the
 causes the dataset recorded.
 """
+
+from .api import score
+from .report import ScoreReport
+from .tracks_file import TrackSet, read_tracks, write_tracks
+
+__all__ = ["ScoreReport", "TrackSet", "read_tracks", "score", "write_tracks"]

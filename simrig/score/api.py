@@ -1,0 +1,129 @@
+"""``score``: a tracker's output against a dataset, every metric and every error's causes in one report."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+
+from ..dataset import Dataset
+from .amota import amota_family
+from .attribution import ERRORS_SCHEMA, Attributor
+from .bev import BevSequence
+from .clear import CLEAR, ClearEvents
+from .clear3d import Accumulation, fragmentations
+from .counts import sum_counts
+from .ground_truth import GroundTruth, load_ground_truth
+from .hota import HOTA
+from .identity import Identity
+from .inputs import camera_sequences, class_sequences, project_tracks
+from .ratios import clear_ratios, hota_ratios, identity_ratios
+from .report import COUNT_METRICS, METRICS_2D, METRICS_3D, ScoreReport
+from .tracks_file import TrackSet, read_tracks
+
+LOOKBACK_S = 1.0
+"""[s] an identity switch is also tagged with the causes of this long before it (see attribution)."""
+
+
+def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookback_s: float = LOOKBACK_S
+          ) -> ScoreReport:
+    """Score ``tracks`` (a tracks folder or file, or a read :class:`TrackSet`) against ``dataset``."""
+    if not isinstance(dataset, Dataset):
+        dataset = Dataset.open(dataset)
+    truth = load_ground_truth(dataset)
+    if not isinstance(tracks, TrackSet):
+        tracks = read_tracks(tracks, frame_count=len(truth.frames), cameras=truth.rig.camera_names)
+    lookback = int(round(lookback_s * float(dataset.scenario["frame_rate_hz"])))
+    errors = []
+    metrics3d = None
+    if tracks.tracks3d is not None:
+        metrics3d, errors3d = _score_3d(truth, tracks, lookback)
+        errors.append(errors3d)
+    if tracks.tracks2d is not None and len(tracks.tracks2d):
+        rows2d, source = tracks.tracks2d, "tracks2d"
+    elif tracks.tracks3d is not None:
+        rows2d, source = project_tracks(truth, tracks.tracks3d), "projected 3D tracks"
+    else:
+        rows2d, source = tracks.tracks2d, "tracks2d"
+    metrics2d, errors2d = _score_2d(truth, rows2d, lookback)
+    metrics2d["source"] = source
+    errors.append(errors2d)
+    return ScoreReport(
+        dataset=str(dataset.path), tracks=tracks.source, scenario=dataset.scenario["name"], seed=dataset.seed,
+        metrics3d=metrics3d, metrics2d=metrics2d,
+        errors=pa.concat_tables(errors) if errors else ERRORS_SCHEMA.empty_table(),
+        settings={"lookback_s": lookback_s},
+    )
+
+
+def _score_3d(truth: GroundTruth, tracks: TrackSet, lookback: int) -> tuple[dict, pa.Table]:
+    attributor = Attributor(truth, truth.miss_causes_3d, lookback)
+    per_class, errors = {}, []
+    for seq in class_sequences(truth, tracks.tracks3d):
+        result = amota_family(seq)
+        per_class[seq.label] = {name: result.metrics[name] for name in METRICS_3D}
+        if result.best is not None or seq.num_gt_dets:
+            errors.append(attributor.tag(seq.label, "", "3d", events_3d(seq, result.best)))
+    overall = {}
+    for name in METRICS_3D:
+        values = np.array([values[name] for values in per_class.values()], dtype=float)
+        present = values[~np.isnan(values)]
+        overall[name] = float("nan") if len(present) == 0 else (
+            float(present.sum()) if name in COUNT_METRICS else float(present.mean()))
+    return {"overall": overall, "per_class": per_class}, _concat(errors)
+
+
+def events_3d(seq: BevSequence, best: Accumulation | None) -> ClearEvents:
+    """The misses, switches and fragmentations of an accumulation (everything missed when ``None``)."""
+    matched = best.matched if best is not None else np.zeros(0, dtype=np.int64)
+    tracked = np.zeros(seq.num_gt_dets, dtype=bool)
+    tracked[seq.pair_gt[matched]] = True
+    frames, actors, track_labels = seq.frames, seq.gt_labels, seq.tracker_labels
+    missed = np.nonzero(~tracked)[0]
+    switches = np.zeros((0, 5), dtype=np.int64)
+    if best is not None and best.switch.any():
+        s = matched[best.switch]
+        switches = np.column_stack([
+            frames[seq.pair_frame[s]], actors[seq.gt_id[seq.pair_gt[s]]],
+            track_labels[seq.tracker_id[seq.pair_tracker[s]]],
+            track_labels[best.previous_track[best.switch]], frames[best.previous_frame[best.switch]],
+        ]).astype(np.int64)
+    resumed, last = fragmentations(seq, tracked)
+    return ClearEvents(
+        misses=np.column_stack([frames[seq.gt_frame[missed]], actors[seq.gt_id[missed]]]).astype(np.int64),
+        switches=switches,
+        fragmentations=np.column_stack([
+            frames[seq.gt_frame[resumed]], actors[seq.gt_id[resumed]], frames[seq.gt_frame[last]]
+        ]).astype(np.int64).reshape(-1, 3),
+    )
+
+
+def _score_2d(truth: GroundTruth, rows2d, lookback: int) -> tuple[dict, pa.Table]:
+    units = (HOTA(), CLEAR(), Identity())
+    counts, errors = [], []
+    miss = truth.miss_causes
+    cameras = truth.rig.camera_names
+    for seq in camera_sequences(truth, rows2d):
+        clear_counts, events = units[1].count_with_events(seq)
+        counts.append((seq.camera, seq.label, {**units[0].count(seq), **clear_counts, **units[2].count(seq)}))
+        attributor = Attributor(truth, miss[:, cameras.index(seq.camera)], lookback)
+        errors.append(attributor.tag(seq.label, seq.camera, "2d", events))
+
+    def metrics(selected: list[dict]) -> dict:
+        if not selected:
+            return dict.fromkeys(METRICS_2D, float("nan"))
+        total = sum_counts(selected)
+        values = {**hota_ratios(total), **clear_ratios(total), **identity_ratios(total)}
+        return {name: values[name] for name in METRICS_2D}
+
+    return {
+        "overall": metrics([c for _, _, c in counts]),
+        "per_camera": {camera: metrics([c for cam, _, c in counts if cam == camera]) for camera in cameras},
+        "per_class": {label: metrics([c for _, lab, c in counts if lab == label])
+                      for label in sorted({lab for _, lab, _ in counts})},
+    }, _concat(errors)
+
+
+def _concat(tables: list[pa.Table]) -> pa.Table:
+    return pa.concat_tables(tables) if tables else ERRORS_SCHEMA.empty_table()

@@ -1,0 +1,125 @@
+"""Why each error happened: every FN, IDS and FRAG tagged with the causes the dataset recorded.
+
+Causes are the sensor's (:class:`~simrig.sensor.causes.Cause` names: ``occluded``, ``truncated``, ``far``,
+``scheduled_occlusion``, ``scheduled_miss``, ``blackout``, ``dropped_frame``, ``out_of_view``, …) plus
+``handover`` (the set of cameras that see the actor changed) and ``none`` (nothing recorded: the detector
+delivered the actor, or missed it at random, and the tracker lost it).
+
+* FN at (frame, actor[, camera]): why the detector did not deliver it there — in 2D that camera's causes
+  where it missed the actor; in 3D, if no camera detected it, the union over the cameras that had it in
+  view (``out_of_view`` when none had). Nothing when the detector delivered it.
+* IDS: the miss causes from the frame after the actor's previous match up to the switch, and at least over
+  the ``lookback`` frames before it; ``handover`` if the actor's camera set changed in that window.
+* FRAG: the miss causes of the gap's frames; ``handover`` if the camera set changed from the last tracked
+  frame to the resumption.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow as pa
+
+from ..sensor.causes import CAUSE_NAMES, Cause
+from .clear import ClearEvents
+from .ground_truth import GroundTruth
+
+HANDOVER = "handover"
+NONE = "none"
+ATTRIBUTION_CAUSES = (*[name for name in CAUSE_NAMES if name != "clutter"], HANDOVER, NONE)
+"""Every tag an error can carry, in reporting order."""
+_HANDOVER_BIT = 1 << 62
+ERRORS_SCHEMA = pa.schema([
+    pa.field("dimension", pa.string()), pa.field("kind", pa.string()), pa.field("frame", pa.int32()),
+    pa.field("camera", pa.string()), pa.field("class", pa.string()), pa.field("actor_id", pa.int64()),
+    pa.field("track_id", pa.int64()), pa.field("previous_track_id", pa.int64()),
+    pa.field("causes", pa.list_(pa.string())),
+])
+"""One row per error: ``dimension`` 3d or 2d; ``kind`` FN, IDS or FRAG; ``camera`` empty in 3D; track ids −1
+where they do not apply (an FN has none; FRAG gives the track that resumed)."""
+
+
+@dataclass(frozen=True)
+class Attributor:
+    """Tags errors of one dimension: ``masks`` ``(R,)`` per ground-truth row (miss causes in 3D or in one
+    camera), with the rows' camera sets, and a look-back window [frames]."""
+
+    truth: GroundTruth
+    masks: np.ndarray
+    lookback: int
+
+    def tag(self, label: str, camera: str, dimension: str, events: ClearEvents) -> pa.Table:
+        """The errors of one sequence's events as rows of :data:`ERRORS_SCHEMA`."""
+        truth = self.truth
+        fn_masks = self.masks[truth.rows_of(events.misses[:, 0], events.misses[:, 1])]
+        switch_masks = [
+            self._window(actor, min(previous + 1, frame - self.lookback), frame,
+                         min(previous, frame - self.lookback))
+            for frame, actor, _, _, previous in events.switches.tolist()
+        ]
+        frag_masks = [self._window(actor, last + 1, frame - 1, last)
+                      for frame, actor, last in events.fragmentations.tolist()]
+        kinds = (["FN"] * len(events.misses) + ["IDS"] * len(events.switches)
+                 + ["FRAG"] * len(events.fragmentations))
+        frames = np.concatenate([events.misses[:, 0], events.switches[:, 0], events.fragmentations[:, 0]])
+        actors = np.concatenate([events.misses[:, 1], events.switches[:, 1], events.fragmentations[:, 1]])
+        none = np.full(len(events.misses), -1)
+        tracks = np.concatenate([none, events.switches[:, 2], np.full(len(events.fragmentations), -1)])
+        previous = np.concatenate([none, events.switches[:, 3], np.full(len(events.fragmentations), -1)])
+        masks = np.concatenate([fn_masks, np.array(switch_masks + frag_masks, dtype=np.int64)])
+        n = len(kinds)
+        return pa.table({
+            "dimension": [dimension] * n, "kind": kinds, "frame": frames.astype(np.int32),
+            "camera": [camera] * n, "class": [label] * n, "actor_id": actors.astype(np.int64),
+            "track_id": tracks.astype(np.int64), "previous_track_id": previous.astype(np.int64),
+            "causes": [cause_names(int(mask)) for mask in masks],
+        }, schema=ERRORS_SCHEMA)
+
+    def _window(self, actor: int, first: int, last: int, handover_from: int) -> int:
+        """Union of the actor's masks over frames [first, last], plus the handover bit if its camera set
+        changed over [handover_from, last + 1]."""
+        rows = self._actor_rows(actor)
+        frames = self.truth.frame[rows]
+        mask = int(np.bitwise_or.reduce(self.masks[rows[(frames >= first) & (frames <= last)]], initial=0))
+        sets = self.truth.camera_sets[rows[(frames >= handover_from) & (frames <= last + 1)]]
+        sets = sets[sets > 0]
+        if len(sets) and np.any(sets != sets[0]):
+            mask |= _HANDOVER_BIT
+        return mask
+
+    def _actor_rows(self, actor: int) -> np.ndarray:
+        return np.nonzero(self.truth.actor_id == actor)[0]
+
+
+def cause_names(mask: int) -> list[str]:
+    """Tag names of a mask: cause names in bit order, ``handover``; ``["none"]`` when empty.
+
+    >>> cause_names(int(Cause.OCCLUDED | Cause.FAR))
+    ['occluded', 'far']
+    >>> cause_names(0)
+    ['none']
+    """
+    names = [name for name, cause in zip(CAUSE_NAMES, Cause, strict=True) if mask & int(cause)]
+    if mask & _HANDOVER_BIT:
+        names.append(HANDOVER)
+    return names or [NONE]
+
+
+def errors_by_cause(errors: pa.Table) -> dict[str, dict[str, dict[str, int]]]:
+    """Per dimension, per tag: how many FN, IDS and FRAG carry it (an error with two tags counts under both),
+    and ``total`` (each error once)."""
+    out: dict[str, dict[str, dict[str, int]]] = {}
+    dims = errors.column("dimension").to_pylist()
+    kinds = errors.column("kind").to_pylist()
+    causes = errors.column("causes").to_pylist()
+    for dimension in sorted(set(dims)):
+        table = {cause: dict.fromkeys(("FN", "IDS", "FRAG"), 0) for cause in (*ATTRIBUTION_CAUSES, "total")}
+        for dim, kind, tags in zip(dims, kinds, causes, strict=True):
+            if dim != dimension:
+                continue
+            table["total"][kind] += 1
+            for tag in tags:
+                table[tag][kind] += 1
+        out[dimension] = {cause: row for cause, row in table.items() if any(row.values()) or cause == "total"}
+    return out

@@ -1,0 +1,103 @@
+"""What ``simrig score`` reports: the metrics per class, per camera and overall, and the errors by cause —
+as a readable table and as JSON (one key per metric; NaN written as null)."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from .attribution import errors_by_cause
+
+METRICS_3D = ("AMOTA", "AMOTP", "MOTAR", "MOTA", "MOTP", "RECALL", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN",
+              "ATVE", "TVE")
+"""3D metrics, nuScenes style (MOTP, AMOTP [m]; ATVE, TVE [m/s])."""
+METRICS_2D = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDSW", "Frag", "MT", "PT", "ML", "IDF1", "IDP",
+              "IDR", "CLR_TP", "CLR_FN", "CLR_FP")
+"""2D metrics, TrackEval style (MOTP: mean IoU of matches)."""
+COUNT_METRICS = {"IDS", "FRAG", "MT", "ML", "TP", "FP", "FN", "IDSW", "Frag", "PT", "CLR_TP", "CLR_FN", "CLR_FP"}
+
+
+@dataclass
+class ScoreReport:
+    """Scores of one tracker output on one dataset.
+
+    metrics3d: ``{"overall": {...}, "per_class": {class: {...}}}`` or ``None`` (no 3D tracks).
+    metrics2d: ``{"overall": ..., "per_class": ..., "per_camera": ...}`` and ``source`` (``tracks2d`` or
+    ``projected 3D tracks``). errors: one row per error (:data:`~simrig.score.attribution.ERRORS_SCHEMA`).
+    """
+
+    dataset: str
+    tracks: str
+    scenario: str
+    seed: int
+    metrics3d: dict | None
+    metrics2d: dict
+    errors: pa.Table
+    settings: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """JSON-ready: metric values with NaN as None."""
+        return _clean({
+            "dataset": self.dataset, "tracks": self.tracks, "scenario": self.scenario, "seed": self.seed,
+            "settings": self.settings, "3d": self.metrics3d, "2d": self.metrics2d,
+            "errors_by_cause": errors_by_cause(self.errors),
+        })
+
+    def write_json(self, path: Path | str) -> None:
+        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
+
+    def write_errors(self, path: Path | str) -> None:
+        """Every error with its causes, as Parquet."""
+        pq.write_table(self.errors, path)
+
+    def table(self) -> str:
+        """The readable summary ``simrig score`` prints."""
+        lines = [f"dataset   {self.dataset} ({self.scenario}, seed {self.seed})", f"tracks    {self.tracks}"]
+        if self.metrics3d is not None:
+            lines += ["", "3D (BEV centre distance < 2 m; class ranges 50 m, motorcycle 40 m)"]
+            lines += _grid(METRICS_3D, {"overall": self.metrics3d["overall"], **self.metrics3d["per_class"]})
+        lines += ["", f"2D per camera (IoU; {self.metrics2d['source']})"]
+        rows = {"overall": self.metrics2d["overall"], **self.metrics2d["per_camera"],
+                **{f"class {name}": value for name, value in self.metrics2d["per_class"].items()}}
+        lines += _grid(METRICS_2D, rows)
+        for dimension, table in errors_by_cause(self.errors).items():
+            lines += ["", f"{dimension.upper()} errors by cause (an error with several causes counts in each)"]
+            lines.append(f"  {'cause':<22}{'FN':>8}{'IDS':>8}{'FRAG':>8}")
+            for cause, counts in table.items():
+                lines.append(f"  {cause:<22}{counts['FN']:>8}{counts['IDS']:>8}{counts['FRAG']:>8}")
+        return "\n".join(lines)
+
+
+def _format(name: str, value) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "-"
+    if name in COUNT_METRICS:
+        return str(int(value))
+    return f"{value:.3f}"
+
+
+def _grid(names: tuple[str, ...], rows: dict[str, dict]) -> list[str]:
+    width = max(len(label) for label in rows) + 2
+    cells = [[_format(name, values.get(name)) for name in names] for values in rows.values()]
+    widths = [max(len(name), *(len(row[i]) for row in cells)) + 2 for i, name in enumerate(names)]
+    out = ["  " + " " * width + "".join(name.rjust(w) for name, w in zip(names, widths, strict=True))]
+    for label, row in zip(rows, cells, strict=True):
+        out.append("  " + label.ljust(width) + "".join(cell.rjust(w) for cell, w in zip(row, widths, strict=True)))
+    return out
+
+
+def _clean(value):
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    if hasattr(value, "item"):
+        return _clean(value.item())
+    return value

@@ -1,0 +1,227 @@
+"""Tracks on disk: the Parquet format of a tracker's output, so that any tracker, in any language, can be scored.
+
+A tracks folder holds one or both of
+
+``tracks3d.parquet``  one row per (frame, track) of a 3D tracker, world frame:
+                      ``frame`` int, ``track_id`` int, ``class`` string, ``score`` float,
+                      ``x, y, z`` [m] box centre, ``length, width, height`` [m] (> 0), ``yaw`` [rad] CCW from +x,
+                      ``vx, vy`` [m/s].
+``tracks2d.parquet``  one row per (frame, camera, track) of a 2D tracker (or a 3D tracker's own per-camera boxes):
+                      ``frame`` int, ``camera`` string, ``track_id`` int, ``class`` string, ``score`` float,
+                      ``x1, y1, x2, y2`` [px] from the image's top-left corner (x2 > x1, y2 > y1).
+
+A single ``.parquet`` file of either layout may be given instead of a folder. Classes are simrig's
+(``car``, ``truck``, ``bus``, ``motorcycle``). Rows may come in any order. Reading rejects, naming the file,
+column and row: a missing or unknown column, a null, a non-finite number, an unknown class or camera, a frame
+outside the dataset, an empty box, and a track id used twice in one frame (per camera in 2D).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.parquet as pq
+
+from ..errors import TracksError
+from ..types import BOX2D_FIELDS, BOX3D_FIELDS, ActorClass, Track
+
+TRACKS3D_FILE = "tracks3d.parquet"
+TRACKS2D_FILE = "tracks2d.parquet"
+_KEYS3D = ("frame", "track_id", "class", "score")
+_KEYS2D = ("frame", "camera", "track_id", "class", "score")
+TRACKS3D_SCHEMA = pa.schema(
+    [pa.field("frame", pa.int32()), pa.field("track_id", pa.int64()), pa.field("class", pa.string()),
+     pa.field("score", pa.float64())] + [pa.field(name, pa.float64()) for name in BOX3D_FIELDS],
+    metadata={"frame": "world: x along the road, y left, z up [m]; yaw [rad] CCW from +x; v [m/s]"},
+)
+TRACKS2D_SCHEMA = pa.schema(
+    [pa.field("frame", pa.int32()), pa.field("camera", pa.string()), pa.field("track_id", pa.int64()),
+     pa.field("class", pa.string()), pa.field("score", pa.float64())]
+    + [pa.field(name, pa.float64()) for name in BOX2D_FIELDS],
+    metadata={"units": "pixel box (x1, y1, x2, y2) from the image's top-left corner"},
+)
+CLASSES = tuple(c.value for c in ActorClass)
+
+
+@dataclass(frozen=True, eq=False)
+class TrackRows:
+    """Validated tracker output of one layout, sorted by frame (then camera in rig order for 2D, then as read).
+
+    frame, track_id, score: ``(R,)``; label: ``(R,)`` class names; boxes: ``(R, 9)`` world boxes
+    (:data:`~simrig.types.BOX3D_FIELDS`) or ``(R, 4)`` pixel boxes; camera: ``(R,)`` names (2D) or ``None``.
+    """
+
+    frame: np.ndarray
+    track_id: np.ndarray
+    label: np.ndarray
+    score: np.ndarray
+    boxes: np.ndarray
+    camera: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return len(self.frame)
+
+
+@dataclass(frozen=True, eq=False)
+class TrackSet:
+    """What a tracker produced: 3D rows, 2D rows, or both; ``source`` is the path they were read from."""
+
+    source: str
+    tracks3d: TrackRows | None
+    tracks2d: TrackRows | None
+
+
+def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]]) -> Path:
+    """Write ``(frame, tracks)`` pairs (as returned by a tracker, frame by frame) to the folder ``out``:
+    ``tracks3d.parquet`` from the tracks' 3D boxes and ``tracks2d.parquet`` from their per-camera boxes
+    (each written only when some track has such boxes; both are written, possibly empty, when none has).
+    Files are written to a temporary name and renamed, so an interrupted write leaves no partial table."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows3d, rows2d = [], []
+    for frame, tracks in frames:
+        for track in tracks:
+            label = ActorClass(track.label).value
+            if track.box3d is not None:
+                rows3d.append((frame, track.track_id, label, track.score, *track.box3d.as_array().tolist()))
+            for camera, box in track.boxes2d.items():
+                rows2d.append((frame, camera, track.track_id, label, track.score, *box.as_array().tolist()))
+    tables = {}
+    if rows3d or not rows2d:
+        tables[TRACKS3D_FILE] = _table(rows3d, TRACKS3D_SCHEMA)
+    if rows2d or not rows3d:
+        tables[TRACKS2D_FILE] = _table(rows2d, TRACKS2D_SCHEMA)
+    for name in (TRACKS3D_FILE, TRACKS2D_FILE):
+        if name not in tables and (out / name).exists():
+            (out / name).unlink()  # a stale table from an earlier run must not be scored with this one
+    for name, table in tables.items():
+        partial = out / f".{name}.partial"
+        pq.write_table(table, partial)
+        os.replace(partial, out / name)
+    return out
+
+
+def _table(rows: list[tuple], schema: pa.Schema) -> pa.Table:
+    columns = list(zip(*rows, strict=True)) if rows else [[] for _ in schema.names]
+    return pa.table([pa.array(list(column), type=field.type) for column, field in zip(columns, schema, strict=True)],
+                    schema=schema)
+
+
+def read_tracks(path: Path | str, *, frame_count: int, cameras: tuple[str, ...]) -> TrackSet:
+    """Read and validate a tracks folder or file against a dataset of ``frame_count`` frames seen by
+    ``cameras``; a :class:`~simrig.errors.TracksError` naming the file, column and row otherwise."""
+    path = Path(path)
+    if path.is_dir():
+        files = {name: path / name for name in (TRACKS3D_FILE, TRACKS2D_FILE) if (path / name).exists()}
+        if not files:
+            raise TracksError(f"{path}: holds neither {TRACKS3D_FILE} nor {TRACKS2D_FILE}")
+    elif path.is_file():
+        files = {_layout_of(path): path}
+    else:
+        raise TracksError(f"tracks {str(path)!r} does not exist")
+    rows = {name: _read(file, name, frame_count, cameras) for name, file in files.items()}
+    return TrackSet(source=str(path), tracks3d=rows.get(TRACKS3D_FILE), tracks2d=rows.get(TRACKS2D_FILE))
+
+
+def _layout_of(file: Path) -> str:
+    """Which layout a single Parquet file has: 2D if it has a ``camera`` column."""
+    try:
+        names = pq.read_schema(file).names
+    except (pa.ArrowInvalid, OSError) as error:
+        raise TracksError(f"{file}: not a readable Parquet file ({error})") from None
+    return TRACKS2D_FILE if "camera" in names else TRACKS3D_FILE
+
+
+def _read(file: Path, layout: str, frame_count: int, cameras: tuple[str, ...]) -> TrackRows:
+    schema = TRACKS3D_SCHEMA if layout == TRACKS3D_FILE else TRACKS2D_SCHEMA
+    try:
+        table = pq.read_table(file)
+    except (pa.ArrowInvalid, OSError) as error:
+        raise TracksError(f"{file}: not a readable Parquet file ({error})") from None
+    missing = [name for name in schema.names if name not in table.column_names]
+    if missing:
+        raise TracksError(f"{file}: missing column(s) {', '.join(missing)} (a {layout} file has: "
+                          f"{', '.join(schema.names)})")
+    unknown = [name for name in table.column_names if name not in schema.names]
+    if unknown:
+        raise TracksError(f"{file}: unknown column(s) {', '.join(unknown)} (a {layout} file has: "
+                          f"{', '.join(schema.names)})")
+    columns = {field.name: _column(file, table, field) for field in schema}
+    frame, track_id = columns["frame"], columns["track_id"]
+
+    def fail(row: int, what: str) -> None:
+        where = f"row {row} (frame {frame[row]}, track {track_id[row]}"
+        where += f", camera {columns['camera'][row]!r})" if "camera" in columns else ")"
+        raise TracksError(f"{file}: {where}: {what}")
+
+    numeric = [name for name in schema.names if name not in ("frame", "track_id", "class", "camera")]
+    values = np.column_stack([columns[name] for name in numeric]) if len(frame) else np.zeros((0, len(numeric)))
+    bad = ~np.isfinite(values)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        fail(int(row), f"column {numeric[col]!r} is {values[row, col]} (must be a finite number)")
+    outside = np.nonzero((frame < 0) | (frame >= frame_count))[0]
+    if len(outside):
+        fail(int(outside[0]), f"frame {frame[outside[0]]} is not in the dataset (frames 0…{frame_count - 1})")
+    unknown_class = np.nonzero(~np.isin(columns["class"], CLASSES))[0]
+    if len(unknown_class):
+        fail(int(unknown_class[0]), f"unknown class {columns['class'][unknown_class[0]]!r} "
+                                    f"(classes: {', '.join(CLASSES)})")
+    if layout == TRACKS2D_FILE:
+        unknown_camera = np.nonzero(~np.isin(columns["camera"], cameras))[0]
+        if len(unknown_camera):
+            fail(int(unknown_camera[0]), f"unknown camera {columns['camera'][unknown_camera[0]]!r} "
+                                         f"(cameras: {', '.join(cameras)})")
+        boxes = np.column_stack([columns[name] for name in BOX2D_FIELDS]).reshape(-1, 4)
+        empty = np.nonzero((boxes[:, 2] <= boxes[:, 0]) | (boxes[:, 3] <= boxes[:, 1]))[0]
+        if len(empty):
+            fail(int(empty[0]), f"empty box {boxes[empty[0]].tolist()} (needs x2 > x1 and y2 > y1)")
+        camera_index = np.searchsorted(np.array(cameras), columns["camera"], sorter=np.argsort(cameras))
+        camera_index = np.argsort(cameras)[camera_index]
+        group = (camera_index,)
+    else:
+        boxes = np.column_stack([columns[name] for name in BOX3D_FIELDS]).reshape(-1, 9)
+        flat = np.nonzero(np.any(boxes[:, 3:6] <= 0.0, axis=1))[0]
+        if len(flat):
+            fail(int(flat[0]), f"box size {boxes[flat[0], 3:6].tolist()} must be positive (length, width, height)")
+        group = ()
+    order = np.lexsort((np.arange(len(frame)), *group, frame))
+    key = np.column_stack([frame, *group, track_id])[order]
+    repeated = np.nonzero(np.all(key[1:] == key[:-1], axis=1))[0] if len(key) > 1 else np.zeros(0, dtype=int)
+    if len(repeated):
+        first, second = order[repeated[0]], order[repeated[0] + 1]
+        fail(int(second), f"track id {track_id[second]} appears twice in this frame (also row {first})")
+    return TrackRows(
+        frame=frame[order].astype(np.int64),
+        track_id=track_id[order],
+        label=columns["class"][order],
+        score=columns["score"][order],
+        boxes=boxes[order],
+        camera=columns["camera"][order] if layout == TRACKS2D_FILE else None,
+    )
+
+
+def _column(file: Path, table: pa.Table, field: pa.Field) -> np.ndarray:
+    """One column as numpy in the field's type; errors name the column (and the first null's row)."""
+    column = table.column(field.name)
+    if column.null_count:
+        row = int(pc.index(pc.is_null(column), True).as_py())
+        raise TracksError(f"{file}: row {row}: column {field.name!r} is null")
+    kind = column.type
+    if pa.types.is_string(field.type) or pa.types.is_large_string(field.type):
+        if not (pa.types.is_string(kind) or pa.types.is_large_string(kind)):
+            raise TracksError(f"{file}: column {field.name!r} must hold strings, found {kind}")
+        return np.asarray(column.to_pylist(), dtype=object)
+    if pa.types.is_integer(field.type):
+        if not pa.types.is_integer(kind):
+            raise TracksError(f"{file}: column {field.name!r} must hold integers, found {kind}")
+        return column.to_numpy().astype(np.int64)
+    if not (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
+        raise TracksError(f"{file}: column {field.name!r} must hold numbers, found {kind}")
+    return column.to_numpy().astype(float)
