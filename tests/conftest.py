@@ -14,3 +14,14 @@ def small_scenario(tmp_path_factory):
         "[traffic]\nvehicles = 15\nwindow_radius_m = 100.0\nspawn_min_distance_m = 70.0\n"
     )
     return load_scenario(path)
+
+
+@pytest.fixture(scope="session")
+def small_dataset(tmp_path_factory, small_scenario):
+    """A generated 30-frame dataset of ``small_scenario`` (seed 0)."""
+    from simrig.dataset import Dataset
+    from simrig.generate import generate
+
+    out = tmp_path_factory.mktemp("datasets") / "small-seed0"
+    generate(small_scenario, seed=0, out=out, progress=False)
+    return Dataset.open(out)
