@@ -64,7 +64,8 @@ def test_worked_example():
 def test_identity_switch_counts_as_matched_but_not_tp():
     """One object over 10 frames; track 1 in frames 0-4, track 2 in frames 5-9 (score 0.9 both). Frame 5 is a
     SWITCH: matched, but not a TP (devkit). Matched TP scores: 9 → recall reaches 0.9 → levels with
-    0.1 + 0.9 i / 39 ≤ 0.9, i ≤ 34 (35 levels), reached. At 0.9: TP 9, IDS 1, FN 0, FP 0, r = 0.9 → MOTAR = 1 − (1 + 0 + 0 − 0.1·10)/9 = 1.
+    0.1 + 0.9 i / 39 ≤ 0.9, i ≤ 34 (35 levels), reached. At 0.9: TP 9, IDS 1, FN 0, FP 0, r = 0.9 →
+    MOTAR = 1 − (1 + 0 + 0 − 0.1·10)/9 = 1.
     AMOTA = 35/40 = 0.875; MOTA = 1 − 1/10 = 0.9; RECALL (matches incl. switches) = 1."""
     gt = [(f, 1, 0.0, 0.0, 0.0, 0.0) for f in range(10)]
     tracks = [(f, 1 if f < 5 else 2, 0.0, 0.0, 0.0, 0.0, 0.9) for f in range(10)]
@@ -150,8 +151,8 @@ def test_3d_matching_equals_motmetrics(seed):
 def test_renaming_track_ids_changes_nothing():
     rng = np.random.default_rng(11)
     gt, tracks = random_3d_scene(rng, 30, 6, crowded=True)
-    renamed = {ident: int(k) for ident, k in zip(sorted({r[1] for r in tracks}),
-                                                  rng.permutation(100000)[: len({r[1] for r in tracks})])}
+    ids = sorted({r[1] for r in tracks})
+    renamed = dict(zip(ids, rng.permutation(100000)[: len(ids)].tolist(), strict=True))
     tracks2 = [(r[0], renamed[r[1]], *r[2:]) for r in tracks]
     a = amota_family(sequence(gt, tracks, np.arange(30))).metrics
     b = amota_family(sequence(gt, tracks2, np.arange(30))).metrics
