@@ -55,10 +55,10 @@ class Attributor:
         fn_masks = self.masks[truth.rows_of(events.misses[:, 0], events.misses[:, 1])]
         switch_masks = [
             self._window(actor, min(previous + 1, frame - self.lookback), frame,
-                         min(previous, frame - self.lookback))
+                         handover_from=min(previous, frame - self.lookback))
             for frame, actor, _, _, previous in events.switches.tolist()
         ]
-        frag_masks = [self._window(actor, last + 1, frame - 1, last)
+        frag_masks = [self._window(actor, last + 1, frame - 1, handover_from=last, handover_to=frame)
                       for frame, actor, last in events.fragmentations.tolist()]
         kinds = (["FN"] * len(events.misses) + ["IDS"] * len(events.switches)
                  + ["FRAG"] * len(events.fragmentations))
@@ -76,13 +76,15 @@ class Attributor:
             "causes": [cause_names(int(mask)) for mask in masks],
         }, schema=ERRORS_SCHEMA)
 
-    def _window(self, actor: int, first: int, last: int, handover_from: int) -> int:
-        """Union of the actor's masks over frames [first, last], plus the handover bit if its camera set
-        changed over [handover_from, last + 1]."""
+    def _window(self, actor: int, first: int, last: int, *, handover_from: int, handover_to: int | None = None
+                ) -> int:
+        """Union of the actor's masks over frames [first, last], plus the handover bit if the set of cameras
+        that see it changed over [handover_from, handover_to] (``handover_to`` defaults to ``last``)."""
+        handover_to = last if handover_to is None else handover_to
         rows = self._actor_rows(actor)
         frames = self.truth.frame[rows]
         mask = int(np.bitwise_or.reduce(self.masks[rows[(frames >= first) & (frames <= last)]], initial=0))
-        sets = self.truth.camera_sets[rows[(frames >= handover_from) & (frames <= last + 1)]]
+        sets = self.truth.camera_sets[rows[(frames >= handover_from) & (frames <= handover_to)]]
         sets = sets[sets > 0]
         if len(sets) and np.any(sets != sets[0]):
             mask |= _HANDOVER_BIT
