@@ -13,6 +13,7 @@ from functools import cached_property
 import numpy as np
 
 from .sequence import dense_ids, frame_slices, same_frame_pairs
+from .similarity import bev_distance
 
 MATCH_DISTANCE_M = 2.0
 """[m] a ground truth and a tracker box can match when their BEV centres are closer than this (strict)."""
@@ -92,8 +93,7 @@ def bev_sequence(
     )
     gt_xy = np.asarray(gt_xy, dtype=float).reshape(-1, 2)
     tracker_xy = np.asarray(tracker_xy, dtype=float).reshape(-1, 2)
-    delta = gt_xy[pair_gt] - tracker_xy[pair_tracker]
-    distance = np.sqrt(np.sum(delta * delta, axis=1))
+    distance = bev_distance(gt_xy[pair_gt], tracker_xy[pair_tracker])
     near = distance < MATCH_DISTANCE_M
     gt_labels, gt_dense = dense_ids(gt_id)
     tracker_labels, tracker_dense = dense_ids(tracker_id)

@@ -2,7 +2,7 @@
 
 2D: intersection over union of pixel boxes (x1, y1, x2, y2) [px], with TrackEval's conventions (a box of zero
 area overlaps nothing). 3D: bird's-eye-view distance between world-frame box centres [m], as nuScenes.
-Both broadcast: ``(…, 4)`` against ``(…, 4)`` gives ``(…)``.
+Both are elementwise and broadcast: ``(…, 4)`` against ``(…, 4)`` gives ``(…)``.
 """
 
 from __future__ import annotations
@@ -39,24 +39,11 @@ def intersects(a: np.ndarray, b: np.ndarray) -> np.ndarray:
             & (np.minimum(a[..., 3], b[..., 3]) > np.maximum(a[..., 1], b[..., 1])))
 
 
-def box_iou(gt: np.ndarray, tracker: np.ndarray) -> np.ndarray:
-    """``(N, M)`` IoU matrix of ``(N, 4)`` and ``(M, 4)`` pixel boxes.
+def bev_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Elementwise bird's-eye-view distance [m] between broadcastable ``(…, ≥2)`` world-frame centres (x, y only).
 
-    >>> box_iou(np.array([[0.0, 0.0, 2.0, 2.0]]), np.array([[1.0, 0.0, 3.0, 2.0], [5.0, 5.0, 6.0, 6.0]]))
-    array([[0.33333333, 0.        ]])
+    >>> float(bev_distance(np.array([0.0, 0.0, 5.0]), np.array([3.0, 4.0, 0.0])))
+    5.0
     """
-    gt = np.asarray(gt, dtype=float).reshape(-1, 4)
-    tracker = np.asarray(tracker, dtype=float).reshape(-1, 4)
-    return iou(gt[:, None, :], tracker[None, :, :])
-
-
-def bev_distance(gt: np.ndarray, tracker: np.ndarray) -> np.ndarray:
-    """``(N, M)`` Euclidean distance [m] between ``(N, ≥2)`` and ``(M, ≥2)`` world-frame centres, x and y only.
-
-    >>> bev_distance(np.array([[0.0, 0.0, 5.0]]), np.array([[3.0, 4.0, 0.0]]))
-    array([[5.]])
-    """
-    gt = np.asarray(gt, dtype=float)
-    tracker = np.asarray(tracker, dtype=float)
-    delta = gt[:, None, :2] - tracker[None, :, :2]
+    delta = np.asarray(a, dtype=float)[..., :2] - np.asarray(b, dtype=float)[..., :2]
     return np.sqrt(np.sum(delta * delta, axis=-1))
