@@ -8,11 +8,10 @@ and ``tracker_labels`` (track ids). World frame: x along the road, y left [m]; v
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 
-from .sequence import dense_ids, frame_slices, same_frame_pairs
+from .sequence import FramePairs, dense_ids, frame_slices, same_frame_pairs
 from .similarity import bev_distance
 
 MATCH_DISTANCE_M = 2.0
@@ -20,7 +19,7 @@ MATCH_DISTANCE_M = 2.0
 
 
 @dataclass(frozen=True, eq=False)
-class BevSequence:
+class BevSequence(FramePairs):
     """3D matching input of one class.
 
     frames: ``(T,)`` frame numbers. gt_frame, gt_id: ``(n,)`` frame position and dense id of each ground-truth
@@ -44,29 +43,6 @@ class BevSequence:
     pair_distance: np.ndarray
     gt_labels: np.ndarray
     tracker_labels: np.ndarray
-
-    @property
-    def num_gt_ids(self) -> int:
-        return len(self.gt_labels)
-
-    @property
-    def num_gt_dets(self) -> int:
-        return len(self.gt_id)
-
-    @cached_property
-    def gt_slices(self) -> np.ndarray:
-        """``(T, 2)`` [start, stop) of each frame's ground-truth rows."""
-        return frame_slices(self.gt_frame, np.arange(len(self.frames)))
-
-    @cached_property
-    def tracker_slices(self) -> np.ndarray:
-        """``(T, 2)`` [start, stop) of each frame's tracker rows."""
-        return frame_slices(self.tracker_frame, np.arange(len(self.frames)))
-
-    @cached_property
-    def pair_frame(self) -> np.ndarray:
-        """``(p,)`` frame position of each pair."""
-        return self.gt_frame[self.pair_gt]
 
 
 def bev_sequence(

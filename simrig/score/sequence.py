@@ -16,32 +16,11 @@ import numpy as np
 from .similarity import intersects, iou
 
 
-@dataclass(frozen=True, eq=False)
-class Sequence:
-    """Matching input of one (camera, class).
-
-    frames: ``(T,)`` frame numbers. gt_frame, gt_id: ``(n,)`` frame position (index into ``frames``) and dense
-    id of each ground-truth box; tracker_frame, tracker_id: ``(m,)`` the same for tracker boxes.
-    pair_gt, pair_tracker: ``(p,)`` row indices of every overlapping pair in the same frame; pair_similarity:
-    ``(p,)`` their IoU (> 0). gt_labels: ``(G,)`` actor ids; tracker_labels: ``(K,)`` track ids.
-    """
-
-    camera: str
-    label: str
-    frames: np.ndarray
-    gt_frame: np.ndarray
-    gt_id: np.ndarray
-    tracker_frame: np.ndarray
-    tracker_id: np.ndarray
-    pair_gt: np.ndarray
-    pair_tracker: np.ndarray
-    pair_similarity: np.ndarray
-    gt_labels: np.ndarray
-    tracker_labels: np.ndarray
-
-    @property
-    def name(self) -> str:
-        return f"{self.camera}/{self.label}"
+class FramePairs:
+    """What every matching input shares, and the per-frame slices derived from it. The dataclasses built on it
+    have the fields: flat ground-truth and tracker rows sorted by frame position (``gt_frame``, ``gt_id``,
+    ``tracker_frame``, ``tracker_id``), same-frame pairs sorted by frame (``pair_gt``, ``pair_tracker``),
+    ``frames`` and the id labels (``gt_labels``, ``tracker_labels``)."""
 
     @property
     def num_gt_ids(self) -> int:
@@ -78,6 +57,34 @@ class Sequence:
     def pair_slices(self) -> np.ndarray:
         """``(T, 2)`` [start, stop) of each frame's pairs."""
         return frame_slices(self.pair_frame, np.arange(len(self.frames)))
+
+
+@dataclass(frozen=True, eq=False)
+class Sequence(FramePairs):
+    """Matching input of one (camera, class).
+
+    frames: ``(T,)`` frame numbers. gt_frame, gt_id: ``(n,)`` frame position (index into ``frames``) and dense
+    id of each ground-truth box; tracker_frame, tracker_id: ``(m,)`` the same for tracker boxes.
+    pair_gt, pair_tracker: ``(p,)`` row indices of every overlapping pair in the same frame; pair_similarity:
+    ``(p,)`` their IoU (> 0). gt_labels: ``(G,)`` actor ids; tracker_labels: ``(K,)`` track ids.
+    """
+
+    camera: str
+    label: str
+    frames: np.ndarray
+    gt_frame: np.ndarray
+    gt_id: np.ndarray
+    tracker_frame: np.ndarray
+    tracker_id: np.ndarray
+    pair_gt: np.ndarray
+    pair_tracker: np.ndarray
+    pair_similarity: np.ndarray
+    gt_labels: np.ndarray
+    tracker_labels: np.ndarray
+
+    @property
+    def name(self) -> str:
+        return f"{self.camera}/{self.label}"
 
     def frame_matrix(self, position: int, values: np.ndarray, fill=0.0) -> np.ndarray:
         """Dense ``(n_t, m_t)`` matrix of frame ``position``: ``values`` (one per pair of the whole sequence) at
