@@ -1,9 +1,25 @@
-"""Systems under test: the ``Tracker`` protocol and the registry by name.
+"""Systems under test: the ``Tracker`` protocol, the registry by name, and the reference trackers.
 
 Trackers import only :mod:`simrig.types` (the shared records), never the world, renderer or scorer.
+
+Registered here: ``saga`` (SAGA-Track with FOTA), ``global_hungarian`` (AB3DMOT-style pooled one-to-one),
+``percam_merge`` (per-camera trackers + heuristic merging), ``simpletrack`` (3D GIoU, two-stage).
 """
 
+from .errors import TrackerInputError
+from .global_hungarian import global_hungarian
+from .percam_merge import percam_merge
 from .protocol import Tracker
-from .registry import available, create, register
+from .registry import available, create, parameters, register
+from .saga import saga
+from .simpletrack import simpletrack
 
-__all__ = ["Tracker", "available", "create", "register"]
+for _name, _factory in (
+    ("saga", saga),
+    ("global_hungarian", global_hungarian),
+    ("percam_merge", percam_merge),
+    ("simpletrack", simpletrack),
+):
+    register(_name, _factory)
+
+__all__ = ["Tracker", "TrackerInputError", "available", "create", "parameters", "register"]

@@ -13,6 +13,7 @@ or by calling :func:`register` directly. An unknown name is an error that lists 
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable
 from importlib import metadata
 
@@ -51,7 +52,41 @@ def create(name: str, **params) -> Tracker:
     except KeyError:
         known = ", ".join(sorted(_FACTORIES)) or "none registered"
         raise KeyError(f"unknown tracker {name!r}; known: {known}") from None
+    _check_params(name, factory, params)
     tracker = factory(**params)
     if not isinstance(tracker, Tracker):
         raise TypeError(f"tracker {name!r}: factory returned {type(tracker).__name__}, which has no reset/step")
     return tracker
+
+
+def parameters(name: str) -> dict[str, object]:
+    """The keyword parameters tracker ``name`` takes, with their defaults (``inspect.Parameter.empty`` when
+    required)."""
+    _load_entry_points()
+    if name not in _FACTORIES:
+        create(name)  # raises the KeyError naming the known trackers
+    try:
+        signature = inspect.signature(_FACTORIES[name])
+    except (TypeError, ValueError):
+        return {}
+    return {
+        p.name: p.default
+        for p in signature.parameters.values()
+        if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)
+    }
+
+
+def _check_params(name: str, factory: Callable[..., Tracker], params: dict) -> None:
+    """An unknown parameter is an error naming the tracker and its parameters (not a TypeError from inside
+    the factory)."""
+    try:
+        signature = inspect.signature(factory)
+    except (TypeError, ValueError):
+        return
+    if any(p.kind is p.VAR_KEYWORD for p in signature.parameters.values()):
+        return
+    known = parameters(name)
+    unknown = sorted(set(params) - set(known))
+    if unknown:
+        listed = ", ".join(known) or "none"
+        raise ValueError(f"tracker {name!r} has no parameter {unknown[0]!r}; parameters: {listed}")

@@ -1,0 +1,53 @@
+"""One-to-one assignment of detections to tracks under a cost gate.
+
+Every assigner returns ``owner`` (M,): for each detection the index of its track, or −1 when unmatched.
+A pair is allowed only when its cost is finite and ``≤ gate``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+UNMATCHED = -1
+
+
+def hungarian(cost: np.ndarray, gate: float) -> np.ndarray:
+    """Minimum-total-cost one-to-one matching (scipy's ``linear_sum_assignment``) over allowed pairs.
+
+    Disallowed pairs get a cost larger than any allowed pair's total, so they are only chosen where nothing
+    else fits, and dropped afterwards.
+
+    >>> hungarian(np.array([[1.0, 0.5], [0.2, 9.0]]), gate=2.0).tolist()
+    [1, 0]
+    """
+    n, m = cost.shape
+    owner = np.full(m, UNMATCHED, dtype=np.int64)
+    allowed = np.isfinite(cost) & (cost <= gate)
+    if not allowed.any():
+        return owner
+    big = np.abs(cost[allowed]).sum() + 1.0
+    rows, cols = linear_sum_assignment(np.where(allowed, cost, big))
+    keep = allowed[rows, cols]
+    owner[cols[keep]] = rows[keep]
+    return owner
+
+
+def greedy(cost: np.ndarray, gate: float) -> np.ndarray:
+    """Take allowed pairs in increasing cost, skipping those whose track or detection is taken (AB3DMOT's
+    nuScenes setting). Ties go to the lower track index, then the lower detection index.
+
+    >>> greedy(np.array([[1.0, 0.5], [0.2, 9.0]]), gate=2.0).tolist()
+    [1, 0]
+    """
+    n, m = cost.shape
+    owner = np.full(m, UNMATCHED, dtype=np.int64)
+    allowed = np.isfinite(cost) & (cost <= gate)
+    rows, cols = np.nonzero(allowed)
+    order = np.lexsort((cols, rows, cost[rows, cols]))
+    track_taken = np.zeros(n, dtype=bool)
+    for i, j in zip(rows[order].tolist(), cols[order].tolist(), strict=True):
+        if not track_taken[i] and owner[j] == UNMATCHED:
+            owner[j] = i
+            track_taken[i] = True
+    return owner

@@ -1,0 +1,38 @@
+"""AB3DMOT-style global baseline: every camera's detections pooled, one-to-one assignment (Hungarian by
+default, greedy optional), every unmatched detection starts a track. MUTR3D's basic baseline is
+``cost='iou3d'`` (predicted boxes enlarged by ``enlarge`` = 1.2 before 3D IoU)."""
+
+from __future__ import annotations
+
+from .assignment import greedy, hungarian
+from .kalman_tracker import KalmanTracker
+from .settings import build_cost, build_kalman, build_life
+
+ASSIGNERS = {"hungarian": hungarian, "greedy": greedy}
+
+
+def global_hungarian(
+    *,
+    cost: str = "mahalanobis",
+    gate: float | None = None,
+    enlarge: float | None = None,
+    assignment: str = "hungarian",
+    life: str = "hits",
+    min_hits: int = 1,
+    max_age_s: float = 1.0,
+    score_threshold: float = 0.0,
+    measurement_variance: float = 1.0,
+) -> KalmanTracker:
+    """cost, gate: as for ``saga`` (the same defaults, so the two differ only in the assignment);
+    enlarge: box scale before IoU/GIoU (``iou3d``/``giou*`` costs only); assignment: ``hungarian`` or
+    ``greedy``; the rest as for ``saga``."""
+    if assignment not in ASSIGNERS:
+        raise ValueError(f"unknown assignment {assignment!r}; known: {', '.join(ASSIGNERS)}")
+    extra = {} if enlarge is None else {"enlarge": float(enlarge)}
+    return KalmanTracker(
+        cost=build_cost(cost, gate, **extra),
+        assign=ASSIGNERS[assignment],
+        life=build_life(life, min_hits=min_hits, max_age_s=max_age_s),
+        kalman=build_kalman(measurement_variance),
+        score_threshold=float(score_threshold),
+    )

@@ -1,0 +1,30 @@
+"""Building blocks shared by the reference trackers' factories: parameters in, parts out."""
+
+from __future__ import annotations
+
+from .cost_models import cost_model
+from .life import LIFE_RULES, HitsAndAge, QueryLife
+from .motion import KalmanConfig
+
+
+def build_cost(cost: str, gate: float | None, **extra):
+    """The cost model ``cost`` with ``gate`` (its default when None) and any extra settings."""
+    params = dict(extra)
+    if gate is not None:
+        params["gate"] = float(gate)
+    return cost_model(cost, **params)
+
+
+def build_life(life: str, *, min_hits: int, max_age_s: float, min_score: float = 0.0) -> HitsAndAge | QueryLife:
+    """``life='hits'``: :class:`HitsAndAge` with these settings; ``'mutr3d'``: :class:`QueryLife` (τ_new 0.4,
+    τ_old 0.35, T = 5 frames)."""
+    if life not in LIFE_RULES:
+        raise ValueError(f"unknown life rule {life!r}; known: {', '.join(LIFE_RULES)}")
+    if life == "hits":
+        return HitsAndAge(min_hits=int(min_hits), max_age_s=float(max_age_s), min_score=float(min_score))
+    return QueryLife()
+
+
+def build_kalman(measurement_variance: float) -> KalmanConfig:
+    """AB3DMOT's filter with measurement variance R = ``measurement_variance`` · I [m², rad²]."""
+    return KalmanConfig(measurement_variance=float(measurement_variance))
