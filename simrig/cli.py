@@ -110,6 +110,73 @@ def _cmd_score(args: argparse.Namespace) -> int:
     return 0
 
 
+def _tracker_param(text: str) -> tuple[str, object]:
+    """An argparse type for ``--param key=value``: the value becomes an int, a float, a bool
+    (``true``/``false``) or stays a string."""
+    key, sep, raw = text.partition("=")
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
+    for convert in (int, float):
+        try:
+            return key, convert(raw)
+        except ValueError:
+            pass
+    lowered = raw.lower()
+    if lowered in ("true", "false"):
+        return key, lowered == "true"
+    return key, raw
+
+
+def _params(pairs: list[tuple[str, object]] | None) -> dict[str, object]:
+    params: dict[str, object] = {}
+    for key, value in pairs or []:
+        if key in params:
+            raise SimrigError(f"--param {key} given twice")
+        params[key] = value
+    return params
+
+
+def _cmd_track(args: argparse.Namespace) -> int:
+    from .track import run_tracker
+
+    result = run_tracker(args.dataset, args.tracker, args.out, _params(args.param))
+    print(
+        f"tracked   {result.frames} frames with {args.tracker}: {result.track_rows} track rows, "
+        f"{result.frames_per_second:.0f} frames/s in step()"
+    )
+    print(f"wrote     {result.out}")
+    return 0
+
+
+def _cmd_trackers(args: argparse.Namespace) -> int:
+    import inspect
+
+    import tracker
+
+    for name in tracker.available():
+        settings = ", ".join(
+            f"{key}={value!r}" if value is not inspect.Parameter.empty else key
+            for key, value in tracker.parameters(name).items()
+        )
+        print(f"{name}: {settings}")
+    return 0
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from .run import run_pipeline
+
+    result = run_pipeline(
+        args.scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=args.out,
+        frames=args.frames, overwrite=args.overwrite, progress=not args.quiet,
+    )
+    print(result.report.table())
+    print(f"\ntracked   {result.tracking.frames} frames with {args.tracker} "
+          f"({result.tracking.frames_per_second:.0f} frames/s in step())")
+    for path in result.written:
+        print(f"wrote     {path}")
+    return 0
+
+
 def _non_negative_float(text: str) -> float:
     try:
         value = float(text)
@@ -160,7 +227,36 @@ def build_parser() -> argparse.ArgumentParser:
     scorer.add_argument("--lookback", type=_non_negative_float, default=1.0,
                         help="[s] an ID switch is also tagged with the causes this long before it (default 1)")
     scorer.set_defaults(run=_cmd_score)
+
+    track = commands.add_parser("track", help="run a registered tracker over a dataset and write its tracks")
+    track.add_argument("dataset", type=Path)
+    _tracker_arguments(track)
+    track.add_argument("--out", type=Path, required=True, help="tracks folder to write")
+    track.set_defaults(run=_cmd_track)
+
+    trackers = commands.add_parser("trackers", help="list the registered trackers and their parameters")
+    trackers.set_defaults(run=_cmd_trackers)
+
+    run = commands.add_parser("run", help="generate a scenario, track it, score it and write a report")
+    run.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
+                     help=f"catalog name or .toml file (default: {DEFAULT_SCENARIO})")
+    run.add_argument("--seed", type=_int_at_least(0), default=0, help="scenario seed (default 0)")
+    run.add_argument("--frames", type=_int_at_least(1), default=None,
+                     help="frames to generate (default: the scenario's)")
+    _tracker_arguments(run)
+    run.add_argument("--out", type=Path, default=None,
+                     help="output folder (default: runs/SCENARIO-seedSEED); holds dataset/, tracks/, report.md")
+    run.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in OUT/dataset")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(run=_cmd_run)
     return parser
+
+
+def _tracker_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--tracker", default="saga", help="registered tracker name (default: saga; see "
+                        "'simrig trackers')")
+    parser.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                        help="a tracker parameter, repeatable (e.g. --param gate=4 --param life=mutr3d)")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -38,17 +38,23 @@ class TrackingRun:
         return self.frames / self.step_seconds if self.step_seconds > 0 else float("inf")
 
 
+def build_tracker(name: str, params: dict | None = None):
+    """Tracker ``name`` built with ``params``; a :class:`TrackingError` naming the tracker and the bad
+    name or parameter otherwise."""
+    try:
+        return tracker_registry.create(name, **(params or {}))
+    except (KeyError, ValueError, TypeError) as error:
+        message = str(error.args[0] if error.args else error)
+        raise TrackingError(message if repr(name) in message else f"tracker {name!r}: {message}") from None
+
+
 def run_tracker(dataset: Dataset | Path | str, name: str, out: Path | str, params: dict | None = None,
                 *, seed: int | None = None) -> TrackingRun:
     """Build tracker ``name`` with ``params``, ``reset`` it on the dataset's rig (``seed`` defaults to the
     dataset's), step it over every sensor frame and write its tracks to the folder ``out``."""
     if not isinstance(dataset, Dataset):
         dataset = Dataset.open(dataset)
-    try:
-        tracker = tracker_registry.create(name, **(params or {}))
-    except (KeyError, ValueError, TypeError) as error:
-        message = error.args[0] if error.args else str(error)
-        raise TrackingError(f"tracker {name!r}: {message}") from None
+    tracker = build_tracker(name, params)
     tracker.reset(rig=dataset.rig, seed=dataset.seed if seed is None else seed)
     outputs: list[tuple[int, list[Track]]] = []
     elapsed = 0.0

@@ -86,3 +86,36 @@ def test_images_are_written_per_camera_and_covered_by_the_manifest(tmp_path, cap
     (out / "images" / "left" / "000001.png").write_bytes(b"tampered")
     assert main(["info", str(out), "--verify"]) == 2
     assert "images" in _error_line(capsys)
+
+
+def test_track_then_score_a_dataset(small_dataset, tmp_path, capsys):
+    out = tmp_path / "tracks"
+    assert main(["track", str(small_dataset.path), "--tracker", "global_hungarian", "--param", "gate=4.5",
+                 "--out", str(out)]) == 0
+    assert "tracked   30 frames with global_hungarian" in capsys.readouterr().out
+    assert (out / "tracks3d.parquet").exists()
+    assert main(["score", str(small_dataset.path), str(out)]) == 0
+    assert "AMOTA" in capsys.readouterr().out
+
+
+def test_track_with_a_bad_tracker_or_parameter_is_one_line(small_dataset, tmp_path, capsys):
+    assert main(["track", str(small_dataset.path), "--tracker", "nope", "--out", str(tmp_path / "t")]) == 2
+    assert "unknown tracker 'nope'; known:" in _error_line(capsys)
+    assert main(["track", str(small_dataset.path), "--param", "gamm=0.2", "--out", str(tmp_path / "t")]) == 2
+    assert "'saga' has no parameter 'gamm'" in _error_line(capsys)
+    with pytest.raises(SystemExit) as exit_:
+        main(["track", str(small_dataset.path), "--param", "gamma", "--out", str(tmp_path / "t")])
+    assert exit_.value.code == 2 and "expected key=value" in _error_line(capsys)
+
+
+def test_run_generates_tracks_scores_and_reports_with_the_command(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["run", "highway_stereo", "--frames", "12", "--tracker", "simpletrack", "--out", str(out),
+                 "--quiet"]) == 0
+    assert "AMOTA" in capsys.readouterr().out
+    report = (out / "report.md").read_text()
+    assert f"simrig run highway_stereo --seed 0 --tracker simpletrack --frames 12 --out {out}" in report
+    assert (out / "score.json").exists() and (out / "errors.parquet").exists()
+    assert (out / "tracks" / "simpletrack" / "tracks3d.parquet").exists()
+    assert main(["run", "highway_stereo", "--frames", "12", "--out", str(out), "--quiet"]) == 2
+    assert "already holds a complete dataset" in _error_line(capsys)

@@ -107,7 +107,7 @@ def _check_finite(frame: SensorFrame, arrays: DetectionArrays, require_3d: bool)
             index = int(row - np.searchsorted(arrays.cameras, arrays.cameras[row]))
             field = f"{name}.{columns[column]}" if columns[column] else name
             raise TrackerInputError(
-                f"frame {frame.frame}, camera {camera!r}, detection {index}: {field} is {values[row, column]!r}"
+                f"frame {frame.frame}, camera {camera!r}, detection {index}: {field} is {float(values[row, column])}"
                 + (" (scores must be in [0, 1])" if name == "score" and np.isfinite(values[row, column]) else "")
             )
     if np.any(arrays.boxes3d[:, 3:6] <= 0) and require_3d:

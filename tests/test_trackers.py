@@ -1,0 +1,162 @@
+"""The reference trackers on hand-built frames: one car seen by two cameras, silent cameras, empty frames,
+floods of detections and bad numbers."""
+
+import numpy as np
+import pytest
+
+import tracker
+from simrig.types import ActorClass, Box2D, Box3D, Camera, Detection, EgoPose, Rig, SensorFrame
+from tracker.errors import TrackerInputError
+from tracker.life import QueryLife, TrackLife
+
+NAMES = ("saga", "global_hungarian", "percam_merge", "simpletrack")
+RIG = Rig("pair", tuple(
+    Camera(name, 1600, 900, 1000.0, 1000.0, 800.0, 450.0, (0.0, 0.0, 1.5), yaw)
+    for name, yaw in (("A", 0.3), ("B", -0.3))
+))
+DT = 0.1  # [s]
+
+
+def _detection(x, y, *, score=0.9, yaw=0.0, vx=10.0, label=ActorClass.CAR):
+    return Detection(Box2D(0, 0, 10, 10), score, label, Box3D(x, y, 0.8, 4.6, 1.9, 1.6, yaw, vx, 0.0))
+
+
+def _frame(index, per_camera):
+    return SensorFrame(index, index * DT, EgoPose(0, 0, 0, 0), RIG,
+                       {name: tuple(per_camera.get(name, ())) for name in RIG.camera_names})
+
+
+def _car_seen_twice(frames=30, silent=()):
+    """A car at 10 m/s along x, 20 m ahead, seen by both cameras with 0.3 m of disagreement; cameras in
+    ``silent`` report nothing in frames 10–59."""
+    out = []
+    for k in range(frames):
+        x = 20.0 + 10.0 * k * DT
+        views = {"A": [_detection(x + 0.15, 0.1)], "B": [_detection(x - 0.15, -0.1)]}
+        for name in silent:
+            if 10 <= k < 60:
+                views[name] = []
+        out.append(_frame(k, views))
+    return out
+
+
+def _run(name, frames, **params):
+    t = tracker.create(name, **params)
+    t.reset(rig=RIG, seed=0)
+    return [t.step(frame) for frame in frames]
+
+
+@pytest.mark.parametrize("name", ["saga", "percam_merge", "simpletrack"])
+def test_a_car_seen_by_two_cameras_is_one_track_with_one_id(name):
+    outputs = _run(name, _car_seen_twice())
+    assert all(len(tracks) == 1 for tracks in outputs)
+    assert len({tracks[0].track_id for tracks in outputs}) == 1
+
+
+def test_one_to_one_pooling_keeps_a_duplicate_of_a_car_seen_twice():
+    outputs = _run("global_hungarian", _car_seen_twice())
+    assert all(len(tracks) == 2 for tracks in outputs)  # the second view has nowhere to go but a new track
+
+
+def test_saga_fuses_both_views_and_learns_the_velocity():
+    outputs = _run("saga", _car_seen_twice())
+    box = outputs[-1][0].box3d
+    assert box.x == pytest.approx(20.0 + 10.0 * 29 * DT, abs=0.3)
+    assert box.vx == pytest.approx(10.0, abs=0.5) and box.vy == pytest.approx(0.0, abs=0.5)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_camera_silent_for_50_frames_changes_nothing_while_the_other_sees_the_car(name):
+    outputs = _run(name, _car_seen_twice(frames=80, silent=("A",)))
+    assert all(tracks for tracks in outputs)
+    ids = {t.track_id for tracks in outputs for t in tracks}
+    # global_hungarian keeps a duplicate while both cameras see the car: it dies when camera A falls silent
+    # and a new one is born when A speaks again.
+    assert len(ids) == (3 if name == "global_hungarian" else 1)
+    assert len(outputs[-1]) == (2 if name == "global_hungarian" else 1)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_empty_frames_give_no_tracks_and_existing_tracks_die_after_their_age(name):
+    frames = _car_seen_twice(frames=5) + [_frame(k, {}) for k in range(5, 40)]
+    outputs = _run(name, frames)
+    assert outputs[4] and not outputs[-1]
+    assert _run(name, [_frame(k, {}) for k in range(3)]) == [[], [], []]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_no_tracks_and_500_detections_in_one_frame(name):
+    rng = np.random.default_rng(0)
+    xy = rng.uniform(-150, 150, (500, 2))
+    views = {"A": [_detection(x, y, score=0.6) for x, y in xy[:250]],
+             "B": [_detection(x, y, score=0.6) for x, y in xy[250:]]}
+    outputs = _run(name, [_frame(0, views), _frame(1, views)])
+    assert 0 < len(outputs[0]) <= 500 and 0 < len(outputs[1]) <= 500
+    assert len({t.track_id for t in outputs[1]}) == len(outputs[1])
+
+
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("field", ["x", "yaw", "score"])
+def test_a_nan_in_a_detection_names_the_camera_and_the_frame(name, field):
+    frames = _car_seen_twice(frames=3)
+    bad = _detection(20.0, 0.0, score=np.nan) if field == "score" else Detection(
+        Box2D(0, 0, 10, 10), 0.9, ActorClass.CAR,
+        Box3D(**{**dict(x=20.0, y=0.0, z=0.8, length=4.6, width=1.9, height=1.6, yaw=0.0), field: np.nan}))
+    frames[2] = _frame(2, {"A": [_detection(21, 0)], "B": [_detection(21, 0), bad]})
+    t = tracker.create(name)
+    t.reset(rig=RIG)
+    t.step(frames[0]), t.step(frames[1])
+    with pytest.raises(TrackerInputError, match=rf"frame 2, camera 'B', detection 1: \S*{field} is nan"):
+        t.step(frames[2])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_time_must_move_forward(name):
+    t = tracker.create(name)
+    t.reset(rig=RIG)
+    t.step(_frame(3, {}))
+    with pytest.raises(TrackerInputError, match="frame 2: timestamp 0.2 s is not after"):
+        t.step(_frame(2, {}))
+
+
+def test_a_3d_tracker_needs_3d_boxes():
+    t = tracker.create("saga")
+    t.reset(rig=RIG)
+    with pytest.raises(TrackerInputError, match="camera 'A', detection 0: no box3d"):
+        t.step(_frame(0, {"A": [Detection(Box2D(0, 0, 1, 1), 0.9, ActorClass.CAR)]}))
+
+
+def test_unknown_parameters_and_values_are_named():
+    with pytest.raises(ValueError, match="'saga' has no parameter 'gamm'.*gamma"):
+        tracker.create("saga", gamm=0.1)
+    with pytest.raises(ValueError, match="unknown cost 'l2'"):
+        tracker.create("saga", cost="l2")
+    with pytest.raises(ValueError, match="unknown life rule"):
+        tracker.create("global_hungarian", life="forever")
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_every_cost_and_the_mutr3d_life_rule_run(name):
+    params = {"life": "mutr3d"} if name == "simpletrack" else {"cost": "giou_bev", "life": "mutr3d"}
+    outputs = _run(name, _car_seen_twice(frames=10), **params)
+    assert all(len(tracks) >= 1 for tracks in outputs)
+
+
+def test_the_mutr3d_rule_counts_misses_below_tau_old_and_resets_only_at_tau_new():
+    rule, life = QueryLife(), TrackLife(score=0.9)
+    assert not rule.may_start(0.39) and rule.may_start(0.4)
+    for score in (0.2, 0.3, 0.37, None):  # 0.37 is between τ_old and τ_new: neither a miss nor a reset
+        rule.observe(life, score, DT)
+    assert life.misses == 3 and not rule.is_dead(life) and not rule.is_reported(life)
+    rule.observe(life, 0.45, DT)
+    assert life.misses == 0 and rule.is_reported(life)
+    for _ in range(5):
+        rule.observe(life, None, DT)
+    assert rule.is_dead(life)
+
+
+def test_same_frames_same_tracks():
+    first = _run("saga", _car_seen_twice())
+    second = _run("saga", _car_seen_twice())
+    assert [[(t.track_id, t.box3d) for t in ts] for ts in first] == [[(t.track_id, t.box3d) for t in ts]
+                                                                    for ts in second]
