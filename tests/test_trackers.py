@@ -160,3 +160,11 @@ def test_same_frames_same_tracks():
     second = _run("saga", _car_seen_twice())
     assert [[(t.track_id, t.box3d) for t in ts] for ts in first] == [[(t.track_id, t.box3d) for t in ts]
                                                                     for ts in second]
+
+
+def test_saga_drops_a_duplicate_track_but_never_a_neighbour_in_the_next_lane():
+    twin_births = _car_seen_twice(frames=3)
+    assert [len(ts) for ts in _run("saga", twin_births, birth_merge_m=0, duplicate_iou=0)] == [2, 2, 2]
+    assert [len(ts) for ts in _run("saga", twin_births, birth_merge_m=0)] == [1, 1, 1]
+    side_by_side = [_frame(k, {"A": [_detection(20 + k, 1.75)], "B": [_detection(20 + k, -1.75)]}) for k in range(5)]
+    assert all(len(ts) == 2 for ts in _run("saga", side_by_side))

@@ -21,11 +21,13 @@ def global_hungarian(
     min_hits: int = 1,
     max_age_s: float = 1.0,
     score_threshold: float = 0.0,
+    duplicate_iou: float = 0.0,
     measurement_variance: float = 1.0,
 ) -> KalmanTracker:
     """cost, gate: as for ``saga`` (the same defaults, so the two differ only in the assignment);
     enlarge: box scale before IoU/GIoU (``iou3d``/``giou*`` costs only); assignment: ``hungarian`` or
-    ``greedy``; the rest as for ``saga``."""
+    ``greedy``; duplicate_iou: off by default (AB3DMOT has no such rule), on for an ablation; the rest as
+    for ``saga``."""
     if assignment not in ASSIGNERS:
         raise ValueError(f"unknown assignment {assignment!r}; known: {', '.join(ASSIGNERS)}")
     extra = {} if enlarge is None else {"enlarge": float(enlarge)}
@@ -35,4 +37,5 @@ def global_hungarian(
         life=build_life(life, min_hits=min_hits, max_age_s=max_age_s),
         kalman=build_kalman(measurement_variance),
         score_threshold=float(score_threshold),
+        duplicate_iou=float(duplicate_iou),
     )

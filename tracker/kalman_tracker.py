@@ -24,6 +24,7 @@ from simrig.types import ActorClass, Box3D, Rig, SensorFrame, Track
 from . import motion
 from .assignment import UNMATCHED
 from .clock import FrameClock
+from .costs import overlaps
 from .detections import LABELS, DetectionArrays, detection_arrays
 from .life import HitsAndAge, TrackLife
 
@@ -56,7 +57,9 @@ class KalmanTracker:
     cost: a cost model (with ``gate``); assign: ``(cost, gate) → owner`` per detection; life: a life rule;
     kalman: the filter's noise settings; score_threshold: detections below it are ignored [-];
     birth_merge_m: unmatched detections of one class from different cameras whose centres are within this
-    distance [m] start one track, not several (0 disables: every unmatched detection starts its own track).
+    distance [m] start one track, not several (0 disables: every unmatched detection starts its own track);
+    duplicate_iou: two tracks of one class whose footprints overlap by at least this bird's-eye-view IoU are
+    one object (two vehicles cannot share road): the one with fewer updates is dropped (0 disables).
     """
 
     def __init__(
@@ -68,6 +71,7 @@ class KalmanTracker:
         kalman: motion.KalmanConfig | None = None,
         score_threshold: float = 0.0,
         birth_merge_m: float = 0.0,
+        duplicate_iou: float = 0.0,
     ):
         self.cost = cost
         self.assign = assign
@@ -77,8 +81,11 @@ class KalmanTracker:
             raise ValueError(f"score_threshold must be in [0, 1], got {score_threshold}")
         if birth_merge_m < 0:
             raise ValueError(f"birth_merge_m must be ≥ 0, got {birth_merge_m}")
+        if not 0 <= duplicate_iou <= 1:
+            raise ValueError(f"duplicate_iou must be in [0, 1], got {duplicate_iou}")
         self.score_threshold = score_threshold
         self.birth_merge_m = birth_merge_m
+        self.duplicate_iou = duplicate_iou
         self.tracks: list[KalmanTrack] = []
         self._next_id = 1
         self.clock = FrameClock()
@@ -115,6 +122,8 @@ class KalmanTracker:
         self.keep_alive(detections, owner, scores)
         self.tracks = [track for track in self.tracks if not self.life.is_dead(track.life)]
         self.births(detections, owner)
+        if self.duplicate_iou > 0:
+            self.drop_duplicates()
 
     def cost_matrix(self, detections: DetectionArrays, tracks: list[KalmanTrack] | None = None) -> np.ndarray:
         """(N, M) cost of ``tracks`` (default: every live track) against every detection; +inf across
@@ -152,6 +161,28 @@ class KalmanTracker:
     def keep_alive(self, detections: DetectionArrays, owner: np.ndarray, updated: dict[int, float]) -> None:
         """A hook after the life rule has seen the frame, for trackers that keep unmatched tracks alive
         (SimpleTrack's second stage); ``updated`` maps the updated track indices to their scores."""
+
+    def drop_duplicates(self) -> None:
+        """Drop the younger (fewer updates; then the later id) of every pair of same-class tracks whose
+        footprints overlap by ``duplicate_iou`` or more."""
+        if len(self.tracks) < 2:
+            return
+        boxes = np.stack([track.kf.x[:7, 0] for track in self.tracks])
+        iou, _ = overlaps(boxes, boxes, bev=True, floor=0.0)
+        labels = np.array([track.label for track in self.tracks])
+        rows, cols = np.nonzero(np.triu(iou >= self.duplicate_iou, k=1) & (labels[:, None] == labels[None, :]))
+        if len(rows) == 0:
+            return
+        rank = sorted(range(len(self.tracks)), key=lambda i: (-self.tracks[i].life.hits, self.tracks[i].track_id))
+        seniority = np.empty(len(self.tracks), dtype=np.int64)
+        seniority[rank] = np.arange(len(rank))
+        dropped: set[int] = set()
+        for i, j in sorted(zip(rows.tolist(), cols.tolist(), strict=True),
+                           key=lambda pair: min(seniority[pair[0]], seniority[pair[1]])):
+            if i in dropped or j in dropped:
+                continue
+            dropped.add(i if seniority[i] > seniority[j] else j)
+        self.tracks = [track for k, track in enumerate(self.tracks) if k not in dropped]
 
     def births(self, detections: DetectionArrays, owner: np.ndarray) -> None:
         """Start tracks from unmatched detections, best score first; with ``birth_merge_m`` a detection from

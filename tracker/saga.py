@@ -30,12 +30,14 @@ def saga(
     max_age_s: float = 1.0,
     score_threshold: float = 0.0,
     birth_merge_m: float = 3.0,
+    duplicate_iou: float = 0.3,
     measurement_variance: float = 1.0,
 ) -> KalmanTracker:
     """SAGA-Track with FOTA. cost: a name from :data:`~tracker.cost_models.COST_MODELS`; gate: its gate
     (model default when None); gamma, iterations, track_mass: FOTA's γ, T and track mass; life: ``hits``
     or ``mutr3d``; min_hits, max_age_s: the ``hits`` rule; birth_merge_m [m]: detections of one new object
-    from two cameras start one track; measurement_variance: the filter's R [m², rad²]."""
+    from two cameras start one track; duplicate_iou: tracks overlapping by this BEV IoU are one object, the
+    younger is dropped; measurement_variance: the filter's R [m², rad²]."""
     return KalmanTracker(
         cost=build_cost(cost, gate),
         assign=partial(_fota_owner, gamma=float(gamma), iterations=int(iterations), track_mass=float(track_mass)),
@@ -43,4 +45,5 @@ def saga(
         kalman=build_kalman(measurement_variance),
         score_threshold=float(score_threshold),
         birth_merge_m=float(birth_merge_m),
+        duplicate_iou=float(duplicate_iou),
     )
