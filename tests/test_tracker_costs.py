@@ -80,19 +80,24 @@ def test_bev_distance_ignores_height():
 
 
 @pytest.mark.parametrize("seed", range(20))
-def test_hungarian_finds_the_cheapest_of_the_largest_matchings(seed):
+def test_hungarian_finds_the_cheapest_matching_when_unmatched_costs_half_the_gate_each(seed):
     rng = np.random.default_rng(seed)
     cost = rng.uniform(0, 10, (3, 4))
     gate = 6.0
+
+    def total(pairs):
+        return sum(cost[i, j] for i, j in pairs) + gate / 2 * (3 + 4 - 2 * len(pairs))
+
     owner = hungarian(cost, gate)
     pairs = [(i, j) for j, i in enumerate(owner.tolist()) if i >= 0]
-    best = (0, 0.0)
-    for perm in itertools.permutations(range(4), 3):
-        allowed = [(i, j) for i, j in enumerate(perm) if cost[i, j] <= gate]
-        key = (len(allowed), -sum(cost[i, j] for i, j in allowed))
-        best = max(best, key)
-    assert (len(pairs), -sum(cost[i, j] for i, j in pairs)) == pytest.approx(best)
-    assert len({i for i, _ in pairs}) == len(pairs)
+    assert len({i for i, _ in pairs}) == len(pairs) and all(cost[i, j] <= gate for i, j in pairs)
+    best = min(
+        total([(i, j) for i, j in zip(rows, cols, strict=False) if cost[i, j] <= gate])
+        for k in range(4)
+        for rows in itertools.permutations(range(3), min(k, 3))
+        for cols in itertools.permutations(range(4), len(rows))
+    )
+    assert total(pairs) == pytest.approx(best)
 
 
 def test_greedy_takes_the_cheapest_pair_first():

@@ -13,10 +13,10 @@ UNMATCHED = -1
 
 
 def hungarian(cost: np.ndarray, gate: float) -> np.ndarray:
-    """Minimum-total-cost one-to-one matching (scipy's ``linear_sum_assignment``) over allowed pairs.
-
-    Disallowed pairs get a cost larger than any allowed pair's total, so they are only chosen where nothing
-    else fits, and dropped afterwards.
+    """Minimum-cost one-to-one matching (scipy's ``linear_sum_assignment``) where leaving a track or a
+    detection unmatched costs ``gate``/2 each, so a pair is worth matching only if its cost is below the gate
+    (SORT/AB3DMOT's thresholded Hungarian, solved exactly on the (N+M) × (M+N) augmented matrix rather than
+    matched first and thresholded after). Disallowed pairs (non-finite or above the gate) never match.
 
     >>> hungarian(np.array([[1.0, 0.5], [0.2, 9.0]]), gate=2.0).tolist()
     [1, 0]
@@ -26,8 +26,16 @@ def hungarian(cost: np.ndarray, gate: float) -> np.ndarray:
     allowed = np.isfinite(cost) & (cost <= gate)
     if not allowed.any():
         return owner
-    big = np.abs(cost[allowed]).sum() + 1.0
-    rows, cols = linear_sum_assignment(np.where(allowed, cost, big))
+    big = 2.0 * gate * (n + m) + 1.0  # dearer than leaving everything unmatched
+    half = gate / 2.0
+    augmented = np.full((n + m, m + n), big)
+    augmented[:n, :m] = np.where(allowed, cost, big)
+    augmented[np.arange(n), m + np.arange(n)] = half  # track i unmatched
+    augmented[n + np.arange(m), np.arange(m)] = half  # detection j unmatched
+    augmented[n:, m:] = 0.0
+    rows, cols = linear_sum_assignment(augmented)
+    pairs = (rows < n) & (cols < m)
+    rows, cols = rows[pairs], cols[pairs]
     keep = allowed[rows, cols]
     owner[cols[keep]] = rows[keep]
     return owner
