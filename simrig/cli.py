@@ -194,11 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     gen = commands.add_parser("generate", help="generate a dataset from a scenario")
-    gen.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
-                     help=f"catalog name or .toml file (default: {DEFAULT_SCENARIO})")
-    gen.add_argument("--seed", type=_int_at_least(0), default=0, help="scenario seed (default 0)")
-    gen.add_argument("--frames", type=_int_at_least(1), default=None,
-                     help="frames to generate (default: the scenario's)")
+    _scenario_arguments(gen)
     gen.add_argument("--out", type=Path, required=True, help="output dataset folder")
     gen.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in --out")
     gen.add_argument("--images", action="store_true", help="also write a PNG per camera and frame (slow)")
@@ -238,11 +234,7 @@ def build_parser() -> argparse.ArgumentParser:
     trackers.set_defaults(run=_cmd_trackers)
 
     run = commands.add_parser("run", help="generate a scenario, track it, score it and write a report")
-    run.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
-                     help=f"catalog name or .toml file (default: {DEFAULT_SCENARIO})")
-    run.add_argument("--seed", type=_int_at_least(0), default=0, help="scenario seed (default 0)")
-    run.add_argument("--frames", type=_int_at_least(1), default=None,
-                     help="frames to generate (default: the scenario's)")
+    _scenario_arguments(run)
     _tracker_arguments(run)
     run.add_argument("--out", type=Path, default=None,
                      help="output folder (default: runs/SCENARIO-seedSEED); holds dataset/, tracks/, report.md")
@@ -250,6 +242,14 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(run=_cmd_run)
     return parser
+
+
+def _scenario_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
+                        help=f"catalog name or .toml file (default: {DEFAULT_SCENARIO})")
+    parser.add_argument("--seed", type=_int_at_least(0), default=0, help="scenario seed (default 0)")
+    parser.add_argument("--frames", type=_int_at_least(1), default=None,
+                        help="frames to generate (default: the scenario's)")
 
 
 def _tracker_arguments(parser: argparse.ArgumentParser) -> None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from .assignment import greedy, hungarian
 from .kalman_tracker import KalmanTracker
-from .settings import build_cost, build_kalman, build_life
+from .settings import kalman_tracker_parts
 
 ASSIGNERS = {"hungarian": hungarian, "greedy": greedy}
 
@@ -32,10 +32,8 @@ def global_hungarian(
         raise ValueError(f"unknown assignment {assignment!r}; known: {', '.join(ASSIGNERS)}")
     extra = {} if enlarge is None else {"enlarge": float(enlarge)}
     return KalmanTracker(
-        cost=build_cost(cost, gate, **extra),
+        **kalman_tracker_parts(cost=cost, gate=gate, life=life, min_hits=min_hits, max_age_s=max_age_s,
+                               measurement_variance=measurement_variance, score_threshold=score_threshold, **extra),
         assign=ASSIGNERS[assignment],
-        life=build_life(life, min_hits=min_hits, max_age_s=max_age_s),
-        kalman=build_kalman(measurement_variance),
-        score_threshold=float(score_threshold),
         duplicate_iou=float(duplicate_iou),
     )

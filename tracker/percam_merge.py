@@ -21,7 +21,7 @@ from .clock import FrameClock
 from .costs import overlaps
 from .detections import LABELS, detection_arrays
 from .kalman_tracker import KalmanTracker
-from .settings import build_cost, build_kalman, build_life
+from .settings import kalman_tracker_parts
 
 
 class PerCameraMerge:
@@ -105,11 +105,9 @@ def percam_merge(
     ``global_hungarian`` (each camera's tracker is one)."""
     def camera_tracker() -> KalmanTracker:
         return KalmanTracker(
-            cost=build_cost(cost, gate),
+            **kalman_tracker_parts(cost=cost, gate=gate, life=life, min_hits=min_hits, max_age_s=max_age_s,
+                                   measurement_variance=measurement_variance, score_threshold=score_threshold),
             assign=hungarian,
-            life=build_life(life, min_hits=min_hits, max_age_s=max_age_s),
-            kalman=build_kalman(measurement_variance),
-            score_threshold=float(score_threshold),
         )
 
     camera_tracker()  # check the settings now, not at reset

@@ -11,7 +11,7 @@ from functools import partial
 
 from .fota import GAMMA, ITERATIONS, fota
 from .kalman_tracker import KalmanTracker
-from .settings import build_cost, build_kalman, build_life
+from .settings import kalman_tracker_parts
 
 
 def _fota_owner(cost, gate, **params):
@@ -39,11 +39,9 @@ def saga(
     from two cameras start one track; duplicate_iou: tracks overlapping by this BEV IoU are one object, the
     younger is dropped; measurement_variance: the filter's R [m², rad²]."""
     return KalmanTracker(
-        cost=build_cost(cost, gate),
+        **kalman_tracker_parts(cost=cost, gate=gate, life=life, min_hits=min_hits, max_age_s=max_age_s,
+                               measurement_variance=measurement_variance, score_threshold=score_threshold),
         assign=partial(_fota_owner, gamma=float(gamma), iterations=int(iterations), track_mass=float(track_mass)),
-        life=build_life(life, min_hits=min_hits, max_age_s=max_age_s),
-        kalman=build_kalman(measurement_variance),
-        score_threshold=float(score_threshold),
         birth_merge_m=float(birth_merge_m),
         duplicate_iou=float(duplicate_iou),
     )

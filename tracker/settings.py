@@ -28,3 +28,15 @@ def build_life(life: str, *, min_hits: int, max_age_s: float, min_score: float =
 def build_kalman(measurement_variance: float) -> KalmanConfig:
     """AB3DMOT's filter with measurement variance R = ``measurement_variance`` · I [m², rad²]."""
     return KalmanConfig(measurement_variance=float(measurement_variance))
+
+
+def kalman_tracker_parts(*, cost: str, gate: float | None, life: str, min_hits: int, max_age_s: float,
+                         measurement_variance: float, score_threshold: float, **cost_extra) -> dict:
+    """Keyword arguments of :class:`~tracker.kalman_tracker.KalmanTracker` every reference tracker shares:
+    the cost model, the life rule, the filter settings and the score threshold."""
+    return {
+        "cost": build_cost(cost, gate, **cost_extra),
+        "life": build_life(life, min_hits=min_hits, max_age_s=max_age_s),
+        "kalman": build_kalman(measurement_variance),
+        "score_threshold": float(score_threshold),
+    }

@@ -15,7 +15,7 @@ from .assignment import UNMATCHED, hungarian
 from .costs import overlaps
 from .detections import DetectionArrays
 from .kalman_tracker import KalmanTracker
-from .settings import build_cost, build_kalman, build_life
+from .settings import kalman_tracker_parts
 
 
 def nms(detections: DetectionArrays, threshold: float) -> np.ndarray:
@@ -93,11 +93,9 @@ def simpletrack(
 ) -> SimpleTrack:
     """gate: on 1 − GIoU (1.5: GIoU ≥ −0.5); the rest as in the module docstring and for ``saga``."""
     return SimpleTrack(
-        cost=build_cost("giou3d", gate),
+        **kalman_tracker_parts(cost="giou3d", gate=gate, life=life, min_hits=min_hits, max_age_s=max_age_s,
+                               measurement_variance=measurement_variance, score_threshold=score_threshold),
         assign=hungarian,
-        life=build_life(life, min_hits=min_hits, max_age_s=max_age_s),
-        kalman=build_kalman(measurement_variance),
-        score_threshold=float(score_threshold),
         nms_threshold=float(nms_threshold),
         score_high=float(score_high),
         score_low=float(score_low),
