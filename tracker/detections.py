@@ -6,7 +6,7 @@ detection, cameras in rig order and detections in camera order.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -25,7 +25,8 @@ class DetectionArrays:
 
     boxes3d: ``(M, 9)`` world-frame boxes in :data:`~simrig.types.BOX3D_FIELDS` order [m, rad, m/s];
     boxes2d: ``(M, 4)`` pixel boxes [px]; scores: ``(M,)`` in [0, 1]; labels: ``(M,)`` int codes into
-    :data:`LABELS`; cameras: ``(M,)`` int index of the camera in the rig.
+    :data:`LABELS`; cameras: ``(M,)`` int index of the camera in the rig; embeddings: ``(M, D)`` appearance
+    unit vectors, a row of NaN where a detection has none (``D`` = 0 when none has one).
     """
 
     boxes3d: np.ndarray
@@ -33,6 +34,11 @@ class DetectionArrays:
     scores: np.ndarray
     labels: np.ndarray
     cameras: np.ndarray
+    embeddings: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=np.float32))
+
+    def __post_init__(self) -> None:
+        if len(self.embeddings) != len(self.scores):
+            object.__setattr__(self, "embeddings", np.full((len(self.scores), 0), np.nan, dtype=np.float32))
 
     def __len__(self) -> int:
         return len(self.scores)
@@ -40,7 +46,8 @@ class DetectionArrays:
     def take(self, rows: np.ndarray) -> DetectionArrays:
         """The detections at ``rows`` (an index or boolean array), in that order."""
         return DetectionArrays(
-            self.boxes3d[rows], self.boxes2d[rows], self.scores[rows], self.labels[rows], self.cameras[rows]
+            self.boxes3d[rows], self.boxes2d[rows], self.scores[rows], self.labels[rows], self.cameras[rows],
+            self.embeddings[rows],
         )
 
     @staticmethod
@@ -60,7 +67,7 @@ def detection_arrays(frame: SensorFrame, *, require_3d: bool = True) -> Detectio
     unknown = sorted(set(frame.detections) - set(names))
     if unknown:
         raise TrackerInputError(f"frame {frame.frame}: detections from camera {unknown[0]!r}, not in rig {names}")
-    boxes3d, boxes2d, scores, labels, cameras = [], [], [], [], []
+    boxes3d, boxes2d, scores, labels, cameras, embeddings = [], [], [], [], [], []
     for camera_index, name in enumerate(names):
         for index, detection in enumerate(frame.detections.get(name, ())):
             where = f"frame {frame.frame}, camera {name!r}, detection {index}"
@@ -79,6 +86,7 @@ def detection_arrays(frame: SensorFrame, *, require_3d: bool = True) -> Detectio
             except ValueError:
                 raise TrackerInputError(f"{where}: unknown label {detection.label!r}") from None
             cameras.append(camera_index)
+            embeddings.append(detection.embedding)
     if not scores:
         return DetectionArrays.empty()
     out = DetectionArrays(
@@ -87,8 +95,32 @@ def detection_arrays(frame: SensorFrame, *, require_3d: bool = True) -> Detectio
         np.asarray(scores, dtype=float),
         np.asarray(labels, dtype=np.int64),
         np.asarray(cameras, dtype=np.int64),
+        _embedding_rows(frame, embeddings, cameras),
     )
     _check_finite(frame, out, require_3d)
+    return out
+
+
+def _embedding_rows(frame: SensorFrame, embeddings: list, cameras: list[int]) -> np.ndarray:
+    """Stack the detections' embeddings (NaN rows where missing); one length for all, else an error naming
+    the detection."""
+    lengths = {len(e) for e in embeddings if e is not None}
+    if len(lengths) > 1:
+        first = next(len(e) for e in embeddings if e is not None)
+        row = next(k for k, e in enumerate(embeddings) if e is not None and len(e) != first)
+        camera = frame.rig.camera_names[cameras[row]]
+        index = row - cameras.index(cameras[row])
+        raise TrackerInputError(f"frame {frame.frame}, camera {camera!r}, detection {index}: embedding has "
+                                f"{len(embeddings[row])} values, other detections have {first}")
+    dimension = lengths.pop() if lengths else 0
+    out = np.full((len(embeddings), dimension), np.nan, dtype=np.float32)
+    for row, embedding in enumerate(embeddings):
+        if embedding is not None:
+            out[row] = embedding
+            if not np.isfinite(out[row]).all():
+                camera = frame.rig.camera_names[cameras[row]]
+                raise TrackerInputError(f"frame {frame.frame}, camera {camera!r}, detection "
+                                        f"{row - cameras.index(cameras[row])}: embedding has a non-finite value")
     return out
 
 
