@@ -99,7 +99,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
 def _cmd_score(args: argparse.Namespace) -> int:
     from .score import score
 
-    report = score(args.dataset, args.tracks, lookback_s=args.lookback)
+    report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera)
     print(report.table())
     if args.json is not None:
         report.write_json(args.json)
@@ -167,7 +167,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     result = run_pipeline(
         args.scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=args.out,
-        frames=args.frames, overwrite=args.overwrite, progress=not args.quiet,
+        frames=args.frames, overwrite=args.overwrite, progress=not args.quiet, camera=args.camera,
     )
     print(result.report.table())
     print(f"\ntracked   {result.tracking.frames} frames with {args.tracker} "
@@ -222,6 +222,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="also write every FN / IDS / FRAG with its causes as Parquet here")
     scorer.add_argument("--lookback", type=_non_negative_float, default=1.0,
                         help="[s] an ID switch is also tagged with the causes this long before it (default 1)")
+    scorer.add_argument("--camera", default=None, metavar="NAME",
+                        help="score only this camera, in 2D (e.g. a stereo pair's ego camera 'left')")
     scorer.set_defaults(run=_cmd_score)
 
     track = commands.add_parser("track", help="run a registered tracker over a dataset and write its tracks")
@@ -239,6 +241,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", type=Path, default=None,
                      help="output folder (default: runs/SCENARIO-seedSEED); holds dataset/, tracks/, report.md")
     run.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in OUT/dataset")
+    run.add_argument("--camera", default=None, metavar="NAME", help="score only this camera, in 2D")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(run=_cmd_run)
     return parser

@@ -37,8 +37,10 @@ def run_pipeline(
     frames: int | None = None,
     overwrite: bool = False,
     progress: bool = False,
+    camera: str | None = None,
 ) -> PipelineResult:
-    """Generate ``scenario`` with ``seed``, run ``tracker`` with ``params`` on it, score and report.
+    """Generate ``scenario`` with ``seed``, run ``tracker`` with ``params`` on it, score (only ``camera``, in
+    2D, when given) and report.
 
     The tracker is built before generating, so a bad tracker name or parameter fails at once."""
     loaded = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
@@ -46,11 +48,11 @@ def run_pipeline(
     build_tracker(tracker, params)  # checked early: a typo should not cost a generation
     dataset = generate(loaded, seed=seed, out=out / "dataset", frames=frames, overwrite=overwrite, progress=progress)
     tracking = run_tracker(dataset.path, tracker, out / "tracks" / tracker, params)
-    report = score(dataset.path, tracking.out)
+    report = score(dataset.path, tracking.out, camera=camera)
     json_path, errors_path, markdown = out / "score.json", out / "errors.parquet", out / "report.md"
     report.write_json(json_path)
     report.write_errors(errors_path)
-    command = _command(scenario, seed, tracker, params, out, frames, overwrite)
+    command = _command(scenario, seed, tracker, params, out, frames, overwrite, camera)
     markdown.write_text(
         f"# {loaded.name}, seed {seed}, tracker {tracker}\n\n"
         f"Produced by `{command}`.\n\n"
@@ -60,12 +62,14 @@ def run_pipeline(
     return PipelineResult(report, tracking, (dataset.path, tracking.out, json_path, errors_path, markdown))
 
 
-def _command(scenario, seed, tracker, params, out, frames, overwrite) -> str:
+def _command(scenario, seed, tracker, params, out, frames, overwrite, camera=None) -> str:
     words = ["simrig", "run", str(scenario.name if isinstance(scenario, Scenario) else scenario),
              "--seed", str(seed), "--tracker", tracker]
     for key, value in (params or {}).items():
         words += ["--param", f"{key}={value}"]
     if frames is not None:
         words += ["--frames", str(frames)]
+    if camera is not None:
+        words += ["--camera", camera]
     words += ["--out", str(out)] + (["--overwrite"] if overwrite else [])
     return shlex.join(words)

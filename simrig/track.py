@@ -51,7 +51,8 @@ def build_tracker(name: str, params: dict | None = None):
 def run_tracker(dataset: Dataset | Path | str, name: str, out: Path | str, params: dict | None = None,
                 *, seed: int | None = None) -> TrackingRun:
     """Build tracker ``name`` with ``params``, ``reset`` it on the dataset's rig (``seed`` defaults to the
-    dataset's), step it over every sensor frame and write its tracks to the folder ``out``."""
+    dataset's), step it over every sensor frame and write its tracks to the folder ``out``. A tracker with a
+    ``finish()`` method (semi-online) has its answer for each frame written instead of ``step``'s."""
     if not isinstance(dataset, Dataset):
         dataset = Dataset.open(dataset)
     tracker = build_tracker(name, params)
@@ -66,5 +67,11 @@ def run_tracker(dataset: Dataset | Path | str, name: str, out: Path | str, param
             raise TrackingError(f"tracker {name!r}: {error}") from None
         elapsed += time.perf_counter() - start
         outputs.append((frame.frame, tracks))
+    finish = getattr(tracker, "finish", None)
+    if callable(finish):  # a semi-online tracker's final word on every frame (it may revise the past)
+        start = time.perf_counter()
+        revised = dict(finish())
+        elapsed += time.perf_counter() - start
+        outputs = [(index, revised.get(index, tracks)) for index, tracks in outputs]
     path = write_tracks(out, outputs)
     return TrackingRun(path, len(outputs), sum(len(t) for _, t in outputs), elapsed)

@@ -8,6 +8,7 @@ import numpy as np
 import pyarrow as pa
 
 from ..dataset import Dataset
+from ..errors import TracksError
 from .amota import amota_family
 from .attribution import ERRORS_SCHEMA, Attributor
 from .bev import BevSequence
@@ -26,18 +27,26 @@ LOOKBACK_S = 1.0
 """[s] an identity switch is also tagged with the causes of this long before it (see attribution)."""
 
 
-def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookback_s: float = LOOKBACK_S
-          ) -> ScoreReport:
-    """Score ``tracks`` (a tracks folder or file, or a read :class:`TrackSet`) against ``dataset``."""
+def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookback_s: float = LOOKBACK_S,
+          camera: str | None = None) -> ScoreReport:
+    """Score ``tracks`` (a tracks folder or file, or a read :class:`TrackSet`) against ``dataset``.
+
+    With ``camera``, only that camera is scored, in 2D (a 2D tracker's own boxes there, or a 3D tracker's
+    projected into it) against the actors in its view, and the 3D metrics are left out: how a per-camera
+    tracker and one that uses the other cameras compare on one camera's ground truth.
+    """
     if not isinstance(dataset, Dataset):
         dataset = Dataset.open(dataset)
+    if camera is not None and camera not in dataset.rig.camera_names:
+        raise TracksError(f"--camera {camera!r}: the dataset's rig {dataset.rig.name!r} has cameras "
+                          f"{', '.join(dataset.rig.camera_names)}")
     truth = load_ground_truth(dataset)
     if not isinstance(tracks, TrackSet):
         tracks = read_tracks(tracks, frame_count=len(truth.frames), cameras=truth.rig.camera_names)
     lookback = int(round(lookback_s * float(dataset.scenario["frame_rate_hz"])))
     errors = []
     metrics3d = None
-    if tracks.tracks3d is not None:
+    if tracks.tracks3d is not None and camera is None:
         metrics3d, errors3d = _score_3d(truth, tracks, lookback)
         errors.append(errors3d)
     if tracks.tracks2d is not None and len(tracks.tracks2d):
@@ -46,14 +55,14 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
         rows2d, source = project_tracks(truth, tracks.tracks3d), "projected 3D tracks"
     else:
         rows2d, source = tracks.tracks2d, "tracks2d"
-    metrics2d, errors2d = _score_2d(truth, rows2d, lookback)
+    metrics2d, errors2d = _score_2d(truth, rows2d, lookback, camera)
     metrics2d["source"] = source
     errors.append(errors2d)
     return ScoreReport(
         dataset=str(dataset.path), tracks=tracks.source, scenario=dataset.scenario["name"], seed=dataset.seed,
         metrics3d=metrics3d, metrics2d=metrics2d,
         errors=pa.concat_tables(errors) if errors else ERRORS_SCHEMA.empty_table(),
-        settings={"lookback_s": lookback_s},
+        settings={"lookback_s": lookback_s, **({"camera": camera} if camera is not None else {})},
     )
 
 
@@ -99,12 +108,13 @@ def events_3d(seq: BevSequence, best: Accumulation | None) -> ClearEvents:
     )
 
 
-def _score_2d(truth: GroundTruth, rows2d, lookback: int) -> tuple[dict, pa.Table]:
+def _score_2d(truth: GroundTruth, rows2d, lookback: int, camera: str | None = None) -> tuple[dict, pa.Table]:
     units = (HOTA(), CLEAR(), Identity())
     counts, errors = [], []
     miss = truth.miss_causes
     cameras = truth.rig.camera_names
-    for seq in camera_sequences(truth, rows2d):
+    scored = cameras if camera is None else (camera,)
+    for seq in camera_sequences(truth, rows2d, scored):
         clear_counts, events = units[1].count_with_events(seq)
         counts.append((seq.camera, seq.label, {**units[0].count(seq), **clear_counts, **units[2].count(seq)}))
         attributor = Attributor(truth, miss[:, cameras.index(seq.camera)], lookback)
@@ -119,7 +129,7 @@ def _score_2d(truth: GroundTruth, rows2d, lookback: int) -> tuple[dict, pa.Table
 
     return {
         "overall": metrics([c for _, _, c in counts]),
-        "per_camera": {camera: metrics([c for cam, _, c in counts if cam == camera]) for camera in cameras},
+        "per_camera": {name: metrics([c for cam, _, c in counts if cam == name]) for name in scored},
         "per_class": {label: metrics([c for _, lab, c in counts if lab == label])
                       for label in sorted({lab for _, lab, _ in counts})},
     }, _concat(errors)

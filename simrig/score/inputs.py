@@ -56,10 +56,14 @@ def project_tracks(truth: GroundTruth, tracks3d: TrackRows) -> TrackRows:
     )
 
 
-def camera_sequences(truth: GroundTruth, tracks2d: TrackRows) -> list[Sequence]:
-    """One sequence per (camera, class) for every camera of the rig and every class present on either side."""
+def camera_sequences(truth: GroundTruth, tracks2d: TrackRows, cameras: tuple[str, ...] | None = None
+                     ) -> list[Sequence]:
+    """One sequence per (camera, class) for every camera of the rig (or of ``cameras``) and every class present
+    on either side."""
     sequences = []
     for c, camera in enumerate(truth.rig.camera_names):
+        if cameras is not None and camera not in cameras:
+            continue
         gt_rows = np.nonzero(truth.in_view[:, c])[0]
         track_rows = np.nonzero(tracks2d.camera == camera)[0]
         labels = sorted(set(truth.label[gt_rows].tolist()) | set(tracks2d.label[track_rows].tolist()))
