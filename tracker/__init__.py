@@ -3,9 +3,12 @@
 Trackers import only :mod:`simrig.types` (the shared records), never the world, renderer or scorer.
 
 Registered here: ``saga`` (SAGA-Track with FOTA), ``global_hungarian`` (AB3DMOT-style pooled one-to-one),
-``percam_merge`` (per-camera trackers + heuristic merging), ``simpletrack`` (3D GIoU, two-stage).
+``percam_merge`` (per-camera trackers + heuristic merging), ``simpletrack`` (3D GIoU, two-stage), and the 2D
+per-camera trackers ``sort`` and ``deepsort`` and ``collabmot`` (stereo collaboration on top of them).
 """
 
+from .collabmot import collabmot
+from .deepsort import deepsort
 from .errors import TrackerInputError
 from .global_hungarian import global_hungarian
 from .percam_merge import percam_merge
@@ -13,12 +16,16 @@ from .protocol import Tracker
 from .registry import available, create, parameters, register
 from .saga import saga
 from .simpletrack import simpletrack
+from .sort import sort
 
 for _name, _factory in (
     ("saga", saga),
     ("global_hungarian", global_hungarian),
     ("percam_merge", percam_merge),
     ("simpletrack", simpletrack),
+    ("sort", sort),
+    ("deepsort", deepsort),
+    ("collabmot", collabmot),
 ):
     register(_name, _factory)
 
