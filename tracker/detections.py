@@ -113,14 +113,16 @@ def _embedding_rows(frame: SensorFrame, embeddings: list, cameras: list[int]) ->
         raise TrackerInputError(f"frame {frame.frame}, camera {camera!r}, detection {index}: embedding has "
                                 f"{len(embeddings[row])} values, other detections have {first}")
     dimension = lengths.pop() if lengths else 0
+    present = [row for row, embedding in enumerate(embeddings) if embedding is not None]
     out = np.full((len(embeddings), dimension), np.nan, dtype=np.float32)
-    for row, embedding in enumerate(embeddings):
-        if embedding is not None:
-            out[row] = embedding
-            if not np.isfinite(out[row]).all():
-                camera = frame.rig.camera_names[cameras[row]]
-                raise TrackerInputError(f"frame {frame.frame}, camera {camera!r}, detection "
-                                        f"{row - cameras.index(cameras[row])}: embedding has a non-finite value")
+    if present:
+        out[present] = np.asarray([embeddings[row] for row in present], dtype=np.float32)
+        bad = ~np.isfinite(out[present]).all(axis=1)
+        if bad.any():
+            row = present[int(np.argmax(bad))]
+            camera = frame.rig.camera_names[cameras[row]]
+            raise TrackerInputError(f"frame {frame.frame}, camera {camera!r}, detection "
+                                    f"{row - cameras.index(cameras[row])}: embedding has a non-finite value")
     return out
 
 
