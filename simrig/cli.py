@@ -96,6 +96,14 @@ def _cmd_render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_export(args: argparse.Namespace) -> int:
+    from .export import export
+
+    out = export(args.dataset, args.format, args.out, tracks=args.tracks, overwrite=args.overwrite)
+    print(f"wrote {out} ({args.format})")
+    return 0
+
+
 def _cmd_score(args: argparse.Namespace) -> int:
     from .score import score
 
@@ -225,6 +233,14 @@ def build_parser() -> argparse.ArgumentParser:
     scorer.add_argument("--camera", default=None, metavar="NAME",
                         help="score only this camera, in 2D (e.g. a stereo pair's ego camera 'left')")
     scorer.set_defaults(run=_cmd_score)
+
+    exporter = commands.add_parser("export", help="write a dataset (and a tracker's output) for other tools")
+    exporter.add_argument("dataset", type=Path)
+    exporter.add_argument("--format", required=True, choices=("motchallenge", "kitti", "nuscenes"))
+    exporter.add_argument("--tracks", type=Path, default=None, help="a tracks folder or file to export too")
+    exporter.add_argument("--out", type=Path, required=True, help="folder to write (must not exist)")
+    exporter.add_argument("--overwrite", action="store_true", help="replace OUT if it exists")
+    exporter.set_defaults(run=_cmd_export)
 
     track = commands.add_parser("track", help="run a registered tracker over a dataset and write its tracks")
     track.add_argument("dataset", type=Path)

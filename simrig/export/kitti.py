@@ -1,0 +1,92 @@
+"""KITTI tracking label files, one folder per camera: ``OUT/CAMERA/label_02/0000.txt`` (ground truth) and, with
+tracks, ``OUT/CAMERA/NAME/0000.txt`` — one sequence, every frame, space-separated:
+
+``frame track_id type truncated occluded alpha left top right bottom height width length x y z rotation_y
+[score]``
+
+Frames from 0; pixel boxes; 3D in the camera frame (x right, y down, z forward; location = bottom centre of the
+box [m]; rotation_y [rad] about the camera's y axis, 0 facing +x; alpha = rotation_y − atan2(x, z)). Types:
+car → ``Car``, truck → ``Truck``, bus → ``Misc``, motorcycle → ``Cyclist`` (KITTI has no bus or motorcycle
+class). ``truncated`` is the projected box's fraction outside the image; ``occluded`` the KITTI level from
+the rendered occlusion ratio (0: < 0.1, 1: < 0.5, 2: ≥ 0.5, 3: not rendered). A tracker's rows carry its
+pixel box and score; their 3D fields are KITTI's "unknown" values (−1, −1000, −10).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .api import ExportInput
+
+KITTI_TYPE = {"car": "Car", "truck": "Truck", "bus": "Misc", "motorcycle": "Cyclist"}
+
+
+def _keyed(table, camera: str, frame: np.ndarray, actor: np.ndarray, column: str, missing: float) -> np.ndarray:
+    """``column`` of ``table`` at each (frame, actor) in ``camera``; ``missing`` where the table has no row."""
+    mask = table.column("camera").to_numpy(zero_copy_only=False) == camera
+    frames, actors = table.column("frame").to_numpy()[mask], table.column("actor_id").to_numpy()[mask]
+    keys = frames.astype(np.int64) * (1 << 32) + actors
+    order = np.argsort(keys)
+    keys, values = keys[order], table.column(column).to_numpy()[mask][order]
+    wanted = frame.astype(np.int64) * (1 << 32) + actor
+    if len(keys) == 0:
+        return np.full(len(wanted), missing)
+    position = np.clip(np.searchsorted(keys, wanted), 0, len(keys) - 1)
+    return np.where(keys[position] == wanted, values[position], missing)
+
+
+def camera_boxes(truth, rows: np.ndarray, c: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(dimensions h, w, l; bottom-centre location in camera ``c``'s frame; rotation_y) of ground-truth rows."""
+    camera = truth.rig.cameras[c]
+    boxes = truth.boxes[rows]
+    position = np.searchsorted(truth.frames, truth.frame[rows])
+    location = np.zeros((len(rows), 3))
+    rotation = np.zeros(len(rows))
+    camera_from_ego = np.linalg.inv(camera.ego_from_camera())
+    for k, (box, p) in enumerate(zip(boxes, position, strict=True)):
+        ego_from_world = np.linalg.inv(truth.egos[p].world_from_ego())
+        transform = camera_from_ego @ ego_from_world
+        bottom = transform @ np.array([box[0], box[1], box[2] - box[5] / 2, 1.0])
+        heading = transform[:3, :3] @ np.array([np.cos(box[6]), np.sin(box[6]), 0.0])
+        location[k] = bottom[:3]
+        rotation[k] = np.arctan2(-heading[2], heading[0])
+    dimensions = np.column_stack([boxes[:, 5], boxes[:, 4], boxes[:, 3]])
+    return dimensions, location, rotation
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    return (angle + np.pi) % (2 * np.pi) - np.pi
+
+
+def write(data: ExportInput, out: Path) -> None:
+    truth = data.truth
+    projections, visibility = data.dataset.table("projections"), data.dataset.table("visibility")
+    for c, camera in enumerate(truth.rig.camera_names):
+        rows = np.nonzero(truth.in_view[:, c])[0]
+        truncated = _keyed(projections, camera, truth.frame[rows], truth.actor_id[rows], "truncation", 0.0)
+        occlusion = _keyed(visibility, camera, truth.frame[rows], truth.actor_id[rows], "occlusion", np.nan)
+        occluded = np.where(np.isnan(occlusion), 3, np.digitize(np.nan_to_num(occlusion), [0.1, 0.5]))
+        dimensions, location, rotation = camera_boxes(truth, rows, c)
+        alpha = _wrap(rotation - np.arctan2(location[:, 0], location[:, 2]))
+        lines = []
+        for k, r in enumerate(rows):
+            b = truth.boxes2d[r, c]
+            lines.append(
+                f"{truth.frame[r]} {truth.actor_id[r]} {KITTI_TYPE[truth.label[r]]} {truncated[k]:.4f} {occluded[k]} "
+                f"{alpha[k]:.6f} {b[0]:.4f} {b[1]:.4f} {b[2]:.4f} {b[3]:.4f} "
+                + " ".join(f"{v:.4f}" for v in (*dimensions[k], *location[k])) + f" {rotation[k]:.6f}\n")
+        folder = out / camera / "label_02"
+        folder.mkdir(parents=True)
+        (folder / "0000.txt").write_text("".join(lines))
+        if data.rows2d is not None:
+            t = np.nonzero(data.rows2d.camera == camera)[0]
+            t = t[np.lexsort((data.rows2d.track_id[t], data.rows2d.frame[t]))]
+            rows2d = data.rows2d
+            folder = out / camera / data.tracker_name
+            folder.mkdir(parents=True)
+            (folder / "0000.txt").write_text("".join(
+                f"{rows2d.frame[k]} {rows2d.track_id[k]} {KITTI_TYPE[rows2d.label[k]]} -1 -1 -10 "
+                f"{rows2d.boxes[k, 0]:.4f} {rows2d.boxes[k, 1]:.4f} {rows2d.boxes[k, 2]:.4f} {rows2d.boxes[k, 3]:.4f} "
+                f"-1 -1 -1 -1000 -1000 -1000 -10 {rows2d.score[k]:.6f}\n" for k in t))
