@@ -96,6 +96,16 @@ def _cmd_render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_replay(args: argparse.Namespace) -> int:
+    from .testing.replay import replay
+
+    result = replay(args.file, tracker=args.tracker, params=_params(args.param) if args.param else None, out=args.out)
+    print(result.report.table())
+    print()
+    print(result.summary())
+    return 0 if result.reproduced else 1
+
+
 def _cmd_export(args: argparse.Namespace) -> int:
     from .export import export
 
@@ -233,6 +243,14 @@ def build_parser() -> argparse.ArgumentParser:
     scorer.add_argument("--camera", default=None, metavar="NAME",
                         help="score only this camera, in 2D (e.g. a stereo pair's ego camera 'left')")
     scorer.set_defaults(run=_cmd_score)
+
+    replay = commands.add_parser("replay", help="rerun a replay file (a failing test's scenario) and compare")
+    replay.add_argument("file", type=Path)
+    replay.add_argument("--tracker", default=None, help="registered name or module:attribute (default: the file's)")
+    replay.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                        help="a tracker parameter, repeatable (default: the file's)")
+    replay.add_argument("--out", type=Path, default=None, help="keep the dataset and tracks here (default: temporary)")
+    replay.set_defaults(run=_cmd_replay)
 
     exporter = commands.add_parser("export", help="write a dataset (and a tracker's output) for other tools")
     exporter.add_argument("dataset", type=Path)

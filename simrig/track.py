@@ -6,6 +6,7 @@ the bench and the CLI both come through here, so a user's tracker and the refere
 
 from __future__ import annotations
 
+import importlib
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,21 +39,51 @@ class TrackingRun:
         return self.frames / self.step_seconds if self.step_seconds > 0 else float("inf")
 
 
-def build_tracker(name: str, params: dict | None = None):
-    """Tracker ``name`` built with ``params``; a :class:`TrackingError` naming the tracker and the bad
-    name or parameter otherwise."""
+def build_tracker(name, params: dict | None = None):
+    """A tracker from ``name``: a registered name, ``"module:attribute"`` (a factory or class to import), a
+    factory or class (called with ``params``) or a tracker object (used as is). A :class:`TrackingError`
+    naming the tracker and the bad name or parameter otherwise."""
+    params = params or {}
+    if isinstance(name, str) and ":" in name and name not in tracker_registry.available():
+        name = _import(name)
+    if not isinstance(name, str):
+        if isinstance(name, tracker_registry.Tracker) and not isinstance(name, type):
+            if params:
+                raise TrackingError(f"tracker {name!r}: parameters {sorted(params)} given for a tracker object")
+            return name
+        try:
+            built = name(**params)
+        except TypeError as error:
+            raise TrackingError(f"tracker {getattr(name, '__qualname__', name)!r}: {error}") from None
+        if not isinstance(built, tracker_registry.Tracker):
+            raise TrackingError(f"tracker {getattr(name, '__qualname__', name)!r} built a {type(built).__name__}, "
+                                "which has no reset/step")
+        return built
     try:
-        return tracker_registry.create(name, **(params or {}))
+        return tracker_registry.create(name, **params)
     except (KeyError, ValueError, TypeError) as error:
         message = str(error.args[0] if error.args else error)
         raise TrackingError(message if repr(name) in message else f"tracker {name!r}: {message}") from None
 
 
-def run_tracker(dataset: Dataset | Path | str, name: str, out: Path | str, params: dict | None = None,
+def _import(spec: str):
+    """``"package.module:Attribute.path"`` → the object; a :class:`TrackingError` naming the spec otherwise."""
+    module_name, _, attribute = spec.partition(":")
+    try:
+        target = importlib.import_module(module_name)
+        for part in attribute.split("."):
+            target = getattr(target, part)
+    except (ImportError, AttributeError) as error:
+        raise TrackingError(f"tracker {spec!r}: cannot import it ({error})") from None
+    return target
+
+
+def run_tracker(dataset: Dataset | Path | str, name, out: Path | str, params: dict | None = None,
                 *, seed: int | None = None) -> TrackingRun:
-    """Build tracker ``name`` with ``params``, ``reset`` it on the dataset's rig (``seed`` defaults to the
-    dataset's), step it over every sensor frame and write its tracks to the folder ``out``. A tracker with a
-    ``finish()`` method (semi-online) has its answer for each frame written instead of ``step``'s."""
+    """Build tracker ``name`` (anything :func:`build_tracker` takes) with ``params``, ``reset`` it on the
+    dataset's rig (``seed`` defaults to the dataset's), step it over every sensor frame and write its tracks to
+    the folder ``out``. A tracker with a ``finish()`` method (semi-online) has its answer for each frame written
+    instead of ``step``'s."""
     if not isinstance(dataset, Dataset):
         dataset = Dataset.open(dataset)
     tracker = build_tracker(name, params)

@@ -1,0 +1,86 @@
+"""simrig's pytest plugin (entry point ``pytest11: simrig``), loaded by any pytest where simrig is installed.
+
+Fixtures:
+
+* ``simrig_scenario`` — a factory: ``simrig_scenario("highway_stereo", frames=10, traffic={"vehicles": 5})``
+  returns a validated scenario from a catalog name or file with tables merged key by key;
+* ``simrig_dataset`` — a small generated dataset (``highway_surround6``, 12 frames, 8 vehicles, seed 0), once
+  per session.
+
+Replayable failures: when a test that ran :func:`simrig.testing.run_tracker` fails, the last scenario it ran —
+the shrunk one, under hypothesis — is written to ``simrig-failures/TEST.toml`` under the rootdir (or
+``--simrig-failures DIR``), and the failure report gets a section with the path and the ``simrig replay``
+command. Nothing here imports hypothesis, the renderer or highway-env until a fixture or a run needs them.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+
+def pytest_addoption(parser):
+    parser.addoption("--simrig-failures", default=None, metavar="DIR",
+                     help="where simrig writes replay files of failing tests (default: ROOTDIR/simrig-failures)")
+
+
+@pytest.fixture
+def simrig_scenario():
+    """Build a scenario from a catalog name or file, overriding any key (tables merge key by key)."""
+    from scenarios import load_scenario
+    from scenarios.schema import Scenario
+
+    def build(base: str = "highway_surround6", **overrides) -> Scenario:
+        raw = load_scenario(base).model_dump(mode="json", exclude_none=True, exclude_unset=True)
+        for key, value in overrides.items():
+            raw[key] = {**raw.get(key, {}), **value} if isinstance(value, dict) else value
+        return Scenario.model_validate(raw)
+
+    return build
+
+
+@pytest.fixture(scope="session")
+def simrig_dataset():
+    """A small generated dataset: ``highway_surround6``, 12 frames, 8 vehicles, seed 0."""
+    from scenarios import load_scenario
+    from scenarios.schema import Scenario
+
+    from .runs import dataset_for
+
+    raw = load_scenario("highway_surround6").model_dump(mode="json", exclude_none=True, exclude_unset=True)
+    raw.update(frames=12, name="simrig_dataset")
+    raw["traffic"] = {**raw.get("traffic", {}), "vehicles": 8, "window_radius_m": 100.0, "spawn_min_distance_m": 70.0}
+    return dataset_for(Scenario.model_validate(raw), seed=0)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item):
+    from . import runs
+
+    runs.clear_runs()
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    outcome = yield
+    report = outcome.get_result()
+    if report.when != "call" or not report.failed:
+        return
+    from . import runs
+
+    recorded = runs.recorded_runs()
+    if not recorded:
+        return
+    from .replay import write_replay
+
+    last = recorded[-1]
+    folder = item.config.getoption("--simrig-failures") or Path(item.config.rootpath) / "simrig-failures"
+    path = Path(folder) / (re.sub(r"[^\w.-]+", "_", item.nodeid.split("::", 1)[-1]) + ".toml")
+    message = str(call.excinfo.value) if call.excinfo is not None else ""
+    written = write_replay(path, last.scenario, last.seed, tracker=last.tracker, params=last.params,
+                           failure=message, scores=last.scores)
+    command = f"simrig replay {written}" + ("" if last.tracker else " --tracker NAME")
+    report.sections.append(("simrig replay", f"scenario of the failing run written to {written}\n"
+                                             f"reproduce it with: {command}"))

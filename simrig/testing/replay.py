@@ -1,0 +1,142 @@
+"""Replay files: a run written as TOML so that ``simrig replay FILE`` reproduces it anywhere.
+
+Layout: ``seed``, ``tracker`` (a registered name or ``module:attribute``; absent when unknown), ``camera``
+(when one camera was scored), ``failure`` (the failing test's message), ``[params]`` (the tracker's),
+``[scores]`` (the failing run's overall 2D and 3D metrics, to compare a replay against) and ``[scenario]``
+(the complete scenario, loadable on its own).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import tomli_w
+from pydantic import ValidationError
+
+from scenarios.schema import Scenario
+
+from ..errors import SimrigError
+from ..score import ScoreReport
+
+
+class ReplayError(SimrigError):
+    """A replay file is missing or malformed; the message names the file and the key."""
+
+
+@dataclass(frozen=True)
+class Replay:
+    scenario: Scenario
+    seed: int
+    tracker: str | None
+    params: dict
+    camera: str | None
+    failure: str | None
+    scores: dict
+
+
+def headline(report: ScoreReport) -> dict:
+    """The overall metrics a replay is compared on: ``{"2d": {...}, "3d": {...}}`` without NaN."""
+    out = {}
+    for key, metrics in (("2d", report.metrics2d), ("3d", report.metrics3d)):
+        if metrics is not None:
+            out[key] = {name: float(value) for name, value in metrics["overall"].items()
+                        if isinstance(value, (int, float)) and not math.isnan(value)}
+    return out
+
+
+def write_replay(path: Path | str, scenario: Scenario, seed: int, *, tracker: str | None = None,
+                 params: dict | None = None, camera: str | None = None, failure: str | None = None,
+                 scores: ScoreReport | None = None) -> Path:
+    """Write a replay file (folders created); returns its path."""
+    document = {"seed": int(seed)}
+    if tracker:
+        document["tracker"] = tracker
+    if camera:
+        document["camera"] = camera
+    if failure:
+        document["failure"] = failure[:4000]
+    document["params"] = {k: v for k, v in (params or {}).items() if v is not None}
+    document["scores"] = headline(scores) if scores is not None else {}
+    document["scenario"] = scenario.model_dump(mode="json", exclude_none=True, exclude_unset=True)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    header = "# simrig replay file: `simrig replay THIS_FILE` reruns the scenario below with the tracker.\n"
+    path.write_text(header + tomli_w.dumps(document), encoding="utf-8")
+    return path
+
+
+def load_replay(path: Path | str) -> Replay:
+    """Read a replay file; a :class:`ReplayError` naming the file and key otherwise."""
+    path = Path(path)
+    try:
+        document = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ReplayError(f"replay file {str(path)!r} does not exist") from None
+    except tomllib.TOMLDecodeError as error:
+        raise ReplayError(f"replay file {str(path)!r}: not TOML ({error})") from None
+    if "scenario" not in document or not isinstance(document.get("seed"), int):
+        raise ReplayError(f"replay file {str(path)!r}: needs an integer 'seed' and a [scenario] table")
+    try:
+        scenario = Scenario.model_validate(document["scenario"])
+    except ValidationError as error:
+        first = error.errors()[0]
+        where = ".".join(str(p) for p in first["loc"])
+        raise ReplayError(f"replay file {str(path)!r}: scenario.{where}: {first['msg']}") from None
+    return Replay(scenario, document["seed"], document.get("tracker"), dict(document.get("params", {})),
+                  document.get("camera"), document.get("failure"), dict(document.get("scores", {})))
+
+
+@dataclass(frozen=True)
+class ReplayResult:
+    """A rerun: its report, the recorded headline metrics and the differences (metric → (recorded, now))."""
+
+    report: ScoreReport
+    recorded: dict
+    differences: dict
+
+    @property
+    def reproduced(self) -> bool:
+        """Every recorded metric came out the same (vacuously true when the file recorded none)."""
+        return not self.differences
+
+    def summary(self) -> str:
+        if not self.recorded:
+            return "the replay file recorded no scores to compare with"
+        if self.reproduced:
+            count = sum(len(v) for v in self.recorded.values())
+            return f"reproduced: all {count} recorded metrics are the same as in the failing run"
+        lines = [f"  {key}: recorded {old}, now {new}" for key, (old, new) in sorted(self.differences.items())]
+        return "NOT reproduced: metrics differ from the failing run\n" + "\n".join(lines)
+
+
+def replay(path: Path | str, *, tracker: str | None = None, params: dict | None = None,
+           out: Path | str | None = None) -> ReplayResult:
+    """Rerun a replay file: generate its scenario with its seed (into ``out`` or a temporary folder), run its
+    tracker (or ``tracker``) with its parameters (or ``params``) and compare the headline metrics."""
+    import tempfile
+
+    from ..generate import generate
+    from ..score import score
+    from ..track import run_tracker
+
+    loaded = load_replay(path)
+    name = tracker or loaded.tracker
+    if not name:
+        raise ReplayError(f"replay file {str(path)!r} names no tracker (it was an object without an importable "
+                          "name); pass --tracker NAME or module:attribute")
+    with tempfile.TemporaryDirectory(prefix="simrig-replay-") as scratch:
+        root = Path(out) if out is not None else Path(scratch)
+        dataset = generate(loaded.scenario, seed=loaded.seed, out=root / "dataset", overwrite=True)
+        run = run_tracker(dataset.path, name, root / "tracks", loaded.params if params is None else params)
+        report = score(dataset.path, run.out, camera=loaded.camera)
+    now = headline(report)
+    differences = {}
+    for dimension, metrics in loaded.scores.items():
+        for metric, value in metrics.items():
+            current = now.get(dimension, {}).get(metric)
+            if current is None or not math.isclose(current, value, rel_tol=1e-9, abs_tol=1e-12):
+                differences[f"{dimension}.{metric}"] = (value, current)
+    return ReplayResult(report, loaded.scores, differences)

@@ -1,0 +1,162 @@
+"""simrig inside other people's test suites: the strategies, properties of our own trackers, the pytest plugin
+from a project outside this repository, and replay files."""
+
+import os
+import random
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+
+from scenarios.schema import Scenario
+from simrig.testing import load_replay, run_tracker, write_replay
+from simrig.testing.runs import dataset_for
+from simrig.testing.strategies import scenarios
+
+QUICK = settings(max_examples=6, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+TRACKERS_3D = ("saga", "global_hungarian", "percam_merge", "simpletrack")
+
+
+@QUICK
+@given(scenarios(perfect=True))
+def test_with_a_perfect_detector_no_3d_tracker_switches_identities(scenario):
+    for name in TRACKERS_3D:
+        report = run_tracker(name, scenario)
+        ids = report.metrics3d["overall"]["IDS"]
+        assert np.isnan(ids) or ids == 0, (name, ids)
+
+
+@QUICK
+@given(scenarios(max_perturbations=0))
+def test_adding_an_occlusion_never_adds_ground_truth_or_detections(scenario):
+    occluded = Scenario.model_validate({
+        **scenario.model_dump(mode="json", exclude_none=True, exclude_unset=True),
+        "perturbations": [{"kind": "occlude", "nearest": 1, "frames": [0, scenario.frames - 1]}],
+    })
+    before, after = dataset_for(scenario), dataset_for(occluded)
+    assert after.table("ground_truth").num_rows == before.table("ground_truth").num_rows
+    assert after.table("detections").num_rows <= before.table("detections").num_rows
+
+
+class Shuffled:
+    """Feeds ``inner`` every frame with each camera's detections in a shuffled order."""
+
+    def __init__(self, inner, seed):
+        self.inner, self.rng = inner, random.Random(seed)
+
+    def reset(self, *, rig, seed=None):
+        self.inner.reset(rig=rig, seed=seed)
+
+    def step(self, frame):
+        from dataclasses import replace
+        shuffled = {name: tuple(self.rng.sample(list(dets), len(dets))) for name, dets in frame.detections.items()}
+        return self.inner.step(replace(frame, detections=shuffled))
+
+
+@QUICK
+@given(scenarios())
+def test_tracking_does_not_depend_on_the_order_of_detections_within_a_frame(scenario):
+    import tracker
+    from simrig.score.tracks_file import read_tracks
+    from simrig.track import run_tracker as run_on_dataset
+
+    dataset = dataset_for(scenario)
+    for name in ("saga", "sort"):
+        rows = []
+        for k, wrapped in enumerate((tracker.create(name), Shuffled(tracker.create(name), 7))):
+            out = run_on_dataset(dataset, wrapped, dataset.path.parent / f"order-{name}-{k}")
+            tracks = read_tracks(out.out, frame_count=dataset.frame_count, cameras=dataset.rig.camera_names)
+            t = tracks.tracks3d if tracks.tracks3d is not None else tracks.tracks2d
+            rows.append(canonical(t.frame, t.track_id, t.boxes))
+        assert rows[0] == rows[1], name
+
+
+def canonical(frame, track_id, boxes):
+    """Rows with ids renamed by first appearance in (frame, box) order: the same tracking up to the names."""
+    order = np.lexsort((*np.round(boxes, 6).T[::-1], frame))
+    names: dict[int, int] = {}
+    out = []
+    for k in order:
+        names.setdefault(int(track_id[k]), len(names))
+        out.append((int(frame[k]), names[int(track_id[k])], *np.round(boxes[k], 6).tolist()))
+    return out
+
+
+def test_a_replay_file_round_trips(tmp_path):
+    from scenarios import load_scenario
+
+    scenario = load_scenario("stereo_one_sided")
+    path = write_replay(tmp_path / "r.toml", scenario, 3, tracker="saga", params={"gate": 4.0}, failure="boom")
+    loaded = load_replay(path)
+    assert loaded.scenario == scenario and loaded.seed == 3 and loaded.tracker == "saga"
+    assert loaded.params == {"gate": 4.0} and loaded.failure == "boom"
+
+
+BROKEN = '''
+"""A deliberately broken tracker: once fewer detections arrive than in the frame before (a miss, an
+occlusion), it never reports anything again."""
+import tracker
+
+
+class DropsAfterOcclusion:
+    def __init__(self):
+        self.inner = tracker.create("saga")
+
+    def reset(self, *, rig, seed=None):
+        self.inner.reset(rig=rig, seed=seed)
+        self.previous, self.broken = None, False
+
+    def step(self, frame):
+        count = sum(len(d) for d in frame.detections.values())
+        self.broken = self.broken or (self.previous is not None and count < self.previous)
+        self.previous = count
+        tracks = self.inner.step(frame)
+        return [] if self.broken else tracks
+'''
+
+PROPERTY = '''
+import math
+
+from hypothesis import given, settings
+from simrig.testing import run_tracker
+from simrig.testing.strategies import scenarios
+from broken_tracker import DropsAfterOcclusion
+
+
+@settings(max_examples=15, deadline=None, derandomize=True)
+@given(scenarios(rigs=("stereo",), max_frames=12, max_vehicles=4))
+def test_the_tracker_keeps_tracking_through_misses(scenario):
+    overall = run_tracker(DropsAfterOcclusion, scenario).metrics2d["overall"]
+    if math.isnan(overall["CLR_TP"]):
+        return  # nothing in view
+    assert overall["CLR_TP"] >= 0.5 * (overall["CLR_TP"] + overall["CLR_FN"]), "recall below one half"
+
+
+def test_fixtures(simrig_dataset, simrig_scenario):
+    assert simrig_dataset.frame_count == 12
+    assert simrig_scenario("highway_stereo", frames=7, traffic={"vehicles": 3}).traffic.vehicles == 3
+'''
+
+
+def test_plugin_from_a_project_outside_the_repository_writes_a_replay_that_reproduces_the_failure(tmp_path):
+    """A fresh project that only has simrig installed: its failing property shrinks, the plugin writes the
+    shrunk scenario and names it in the failure report, and ``simrig replay`` reproduces the failing scores."""
+    (tmp_path / "broken_tracker.py").write_text(textwrap.dedent(BROKEN))
+    (tmp_path / "test_property.py").write_text(textwrap.dedent(PROPERTY))
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    run = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "test_property.py"],
+                         cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)
+    output = run.stdout + run.stderr
+    assert run.returncode == 1 and "1 failed, 1 passed" in output, output[-3000:]
+    replay_file = tmp_path / "simrig-failures" / "test_the_tracker_keeps_tracking_through_misses.toml"
+    assert replay_file.is_file() and f"simrig replay {replay_file}" in output
+    replay = load_replay(replay_file)
+    assert replay.tracker == "broken_tracker:DropsAfterOcclusion" and "recall below one half" in replay.failure
+    recorded = replay.scores["2d"]
+    assert recorded["CLR_TP"] < 0.5 * (recorded["CLR_TP"] + recorded["CLR_FN"])  # the failing run's own numbers
+    assert replay.scenario.frames <= 4 and len(replay.scenario.perturbations) <= 1  # shrunk from up to 12 and 2
+    again = subprocess.run([sys.executable, "-m", "simrig.cli", "replay", str(replay_file)], cwd=tmp_path, env=env,
+                           capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0 and "reproduced: all" in again.stdout, again.stdout[-2000:] + again.stderr[-2000:]
