@@ -8,6 +8,7 @@ import sys
 import textwrap
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 
 from scenarios.schema import Scenario
@@ -140,23 +141,45 @@ def test_fixtures(simrig_dataset, simrig_scenario):
 '''
 
 
-def test_plugin_from_a_project_outside_the_repository_writes_a_replay_that_reproduces_the_failure(tmp_path):
-    """A fresh project that only has simrig installed: its failing property shrinks, the plugin writes the
-    shrunk scenario and names it in the failure report, and ``simrig replay`` reproduces the failing scores."""
-    (tmp_path / "broken_tracker.py").write_text(textwrap.dedent(BROKEN))
-    (tmp_path / "test_property.py").write_text(textwrap.dedent(PROPERTY))
-    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
-    run = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "test_property.py"],
-                         cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)
+def plugin_project(python: str, project, env: dict) -> None:
+    """In ``project`` (outside this repository), run the failing property with ``python``'s pytest and check
+    that the shrunk scenario is written, named in the report, and reproduced by ``simrig replay``."""
+    (project / "broken_tracker.py").write_text(textwrap.dedent(BROKEN))
+    (project / "test_property.py").write_text(textwrap.dedent(PROPERTY))
+    env = {**env, "PYTHONPATH": str(project)}
+    run = subprocess.run([python, "-m", "pytest", "-q", "-p", "no:cacheprovider", "test_property.py"],
+                         cwd=project, env=env, capture_output=True, text=True, timeout=600)
     output = run.stdout + run.stderr
     assert run.returncode == 1 and "1 failed, 1 passed" in output, output[-3000:]
-    replay_file = tmp_path / "simrig-failures" / "test_the_tracker_keeps_tracking_through_misses.toml"
+    replay_file = project / "simrig-failures" / "test_the_tracker_keeps_tracking_through_misses.toml"
     assert replay_file.is_file() and f"simrig replay {replay_file}" in output
     replay = load_replay(replay_file)
     assert replay.tracker == "broken_tracker:DropsAfterOcclusion" and "recall below one half" in replay.failure
     recorded = replay.scores["2d"]
     assert recorded["CLR_TP"] < 0.5 * (recorded["CLR_TP"] + recorded["CLR_FN"])  # the failing run's own numbers
     assert replay.scenario.frames <= 4 and len(replay.scenario.perturbations) <= 1  # shrunk from up to 12 and 2
-    again = subprocess.run([sys.executable, "-m", "simrig.cli", "replay", str(replay_file)], cwd=tmp_path, env=env,
+    again = subprocess.run([python, "-m", "simrig.cli", "replay", str(replay_file)], cwd=project, env=env,
                            capture_output=True, text=True, timeout=300)
     assert again.returncode == 0 and "reproduced: all" in again.stdout, again.stdout[-2000:] + again.stderr[-2000:]
+
+
+def test_plugin_from_a_project_outside_the_repository_writes_a_replay_that_reproduces_the_failure(tmp_path):
+    """A project in a temporary folder, using this environment's installed simrig: its failing property shrinks,
+    the plugin writes the shrunk scenario and names it in the failure report, ``simrig replay`` reproduces it."""
+    plugin_project(sys.executable, tmp_path, dict(os.environ))
+
+
+@pytest.mark.slow
+def test_plugin_works_in_a_fresh_venv_that_only_pip_installs_simrig(tmp_path):
+    """The same, in a new virtual environment with nothing but ``pip install simrig[testing] pytest`` (from this
+    checkout, built as a wheel, not editable)."""
+    repository = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+    python = str(venv / "bin" / "python")
+    subprocess.run([python, "-m", "pip", "install", "-q", f"{repository}[testing]", "pytest"], check=True,
+                   timeout=1500, capture_output=True)
+    project = tmp_path / "project"
+    project.mkdir()
+    env = {key: value for key, value in os.environ.items() if key not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    plugin_project(python, project, env)
