@@ -14,17 +14,17 @@ from hypothesis import HealthCheck, given, settings
 from scenarios.schema import Scenario
 from simrig.testing import load_replay, run_tracker, write_replay
 from simrig.testing.runs import dataset_for
-from simrig.testing.strategies import scenarios
+from simrig.testing.strategies import scenarios, seeds
 
 QUICK = settings(max_examples=6, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 TRACKERS_3D = ("saga", "global_hungarian", "percam_merge", "simpletrack")
 
 
 @QUICK
-@given(scenarios(perfect=True))
-def test_with_a_perfect_detector_no_3d_tracker_switches_identities(scenario):
+@given(scenarios(perfect=True), seeds)
+def test_with_a_perfect_detector_no_3d_tracker_switches_identities(scenario, seed):
     for name in TRACKERS_3D:
-        report = run_tracker(name, scenario)
+        report = run_tracker(name, scenario, seed=seed)
         ids = report.metrics3d["overall"]["IDS"]
         assert np.isnan(ids) or ids == 0, (name, ids)
 
@@ -122,7 +122,7 @@ import math
 
 from hypothesis import given, settings
 from simrig.testing import run_tracker
-from simrig.testing.strategies import scenarios
+from simrig.testing.strategies import scenarios, seeds
 from broken_tracker import DropsAfterOcclusion
 
 

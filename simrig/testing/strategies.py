@@ -19,6 +19,9 @@ from scenarios.schema import Scenario
 
 RIGS = ("surround6", "stereo")
 
+seeds = st.integers(min_value=0, max_value=2**31 - 1)
+"""Scenario seeds (every random stream of a generation comes from one): ``run_tracker(..., seed=draw(seeds))``."""
+
 
 @st.composite
 def windows(draw, frames: int) -> list[int]:
