@@ -16,12 +16,11 @@ lost tracklets in the history) shows how D+A grows. Written to ``reports/perf/co
 from __future__ import annotations
 
 import argparse
-import platform
 import time
 from pathlib import Path
 
 import numpy as np
-from published import cached_dataset, command_line, publish  # tests/perf helpers
+from published import cached_dataset, command_line, machine, publish  # tests/perf helpers
 from scipy.optimize import linear_sum_assignment
 
 import tracker
@@ -111,8 +110,8 @@ def main() -> None:
     lines = [
         "# CollabMOT: distance + association time per frame",
         "",
-        f"Produced by `{command_line()}` ({platform.processor() or platform.machine()}, Python "
-        f"{platform.python_version()}, one process on a shared 2-core machine). Scenario `stereo_one_sided`, "
+        f"Produced by `{command_line()}` ({machine()}, one process on a shared 2-core machine). "
+        "Scenario `stereo_one_sided`, "
         f"seeds {', '.join(map(str, args.seeds))}, {args.frames} frames each, {args.repeats} repeats. "
         "D+A: CollabMOT's affinity matrix (Eq. 2, 5, 8-9) and Algorithms 1-2 per frame, as the paper's "
         "Table 5 (2.79-3.16 ms there, on an i7-11700K). SCT: the two per-camera trackers' `step` together, "

@@ -17,11 +17,10 @@ and IDF1 over the per-camera tracker it runs on the ego camera, in every combina
 from __future__ import annotations
 
 import argparse
-import platform
 from pathlib import Path
 
 import numpy as np
-from published import cached_dataset, command_line, publish  # tests/perf helpers
+from published import cached_dataset, command_line, machine, publish  # tests/perf helpers
 
 from scenarios import load_scenario
 from simrig.score import score
@@ -78,8 +77,7 @@ def main() -> None:
     lines = [
         "# CollabMOT against its per-camera baseline, ego camera",
         "",
-        f"Produced by `{command_line()}` ({platform.processor() or platform.machine()}, Python "
-        f"{platform.python_version()}). Scenarios: "
+        f"Produced by `{command_line()}` ({machine()}). Scenarios: "
         + ", ".join(f"`{s}` (stereo pair, {baselines[s]:g} m baseline)" for s in args.scenarios)
         + f"; seeds {', '.join(map(str, args.seeds))}; {args.frames} frames at 10 Hz. Every tracker with its "
         "default parameters (CollabMOT: the paper's) on the same detections, scored on the ego camera `left` "

@@ -15,11 +15,10 @@ IDS at most one third, AMOTA not lower.
 from __future__ import annotations
 
 import argparse
-import platform
 from pathlib import Path
 
 import numpy as np
-from published import cached_dataset, command_line, publish  # tests/perf helpers
+from published import cached_dataset, command_line, machine, publish  # tests/perf helpers
 
 from scenarios import load_scenario
 from simrig.score import score
@@ -79,8 +78,7 @@ def main() -> None:
     lines = [
         "# Reference trackers on the same detections",
         "",
-        f"Produced by `{command}` ({platform.processor() or platform.machine()}, Python "
-        f"{platform.python_version()}). Scenarios: "
+        f"Produced by `{command}` ({machine()}). Scenarios: "
         + ", ".join(f"`{s}` (surround6, {overlaps[s]:g}° overlap)" for s in args.scenarios)
         + f"; seeds {', '.join(map(str, args.seeds))}; {args.frames} frames each at 10 Hz; every tracker with "
         "its default parameters on the same generated detections. 3D metrics over every class (BEV centre "

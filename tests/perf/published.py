@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import platform
 import shlex
 import sys
 from pathlib import Path
@@ -28,6 +29,11 @@ def cached_dataset(scenario: str, seed: int, frames: int, data: Path) -> Dataset
 def command_line() -> str:
     """The command that is running, as a user would type it from the repository root."""
     return shlex.join(["python", str(Path(sys.argv[0]).as_posix()), *sys.argv[1:]])
+
+
+def machine() -> str:
+    """The processor (or machine type) and Python version a report was produced on: ``x86_64, Python 3.11.7``."""
+    return f"{platform.processor() or platform.machine()}, Python {platform.python_version()}"
 
 
 def publish(lines: list[str], out: Path) -> None:

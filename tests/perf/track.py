@@ -21,14 +21,13 @@ Targets (issue 5): FOTA association under 2 ms; ``saga`` at least 100 frames per
 from __future__ import annotations
 
 import argparse
-import platform
 import statistics
 import time
 from pathlib import Path
 
 import numpy as np
 import ot
-from published import cached_dataset, command_line, publish  # tests/perf helpers
+from published import cached_dataset, command_line, machine, publish  # tests/perf helpers
 from scipy.optimize import linear_sum_assignment
 
 import tracker
@@ -129,8 +128,7 @@ def main() -> None:
     lines = [
         "# Tracker benchmark",
         "",
-        f"Produced by `{command}` ({platform.processor() or platform.machine()}, Python "
-        f"{platform.python_version()}, numpy {np.__version__}, POT {ot.__version__}).",
+        f"Produced by `{command}` ({machine()}, numpy {np.__version__}, POT {ot.__version__}).",
         "",
         f"## Association, {n} tracks × {m} detections",
         "",
