@@ -205,6 +205,30 @@ def _non_negative_float(text: str) -> float:
     return value
 
 
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from .bench import run_bench
+
+    try:
+        result = run_bench(args.suite, engine=args.engine, workers=args.workers, out=args.out, cache=args.cache,
+                           address=args.address, progress=not args.quiet)
+    except KeyboardInterrupt:
+        print("simrig: interrupted; every finished cell is kept: run the same command again to resume",
+              file=sys.stderr)
+        return 130
+    print(f"bench     {result.out}: {result.points} points, {result.cells} cells ({result.cells_skipped} finished "
+          f"earlier, {result.cells_run} run now), {result.rows} result rows")
+    print(f"results   {result.results}")
+    print(f"report    simrig report {result.out}")
+    return 0
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from .report import write_report
+
+    print(write_report(args.results, out=args.out))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _OneLineParser(
         prog="simrig", description="A test bench for multi-camera multi-object trackers on moving vehicles."
@@ -268,6 +292,27 @@ def build_parser() -> argparse.ArgumentParser:
 
     trackers = commands.add_parser("trackers", help="list the registered trackers and their parameters")
     trackers.set_defaults(run=_cmd_trackers)
+
+    from .bench.engines import ENGINES
+    from .bench.suite import suite_catalog
+
+    bench = commands.add_parser("bench", help="run a suite: scenarios x trackers x seeds x sweeps, resumable")
+    bench.add_argument("suite", help=f"named suite ({', '.join(suite_catalog())}) or a suite .toml file")
+    bench.add_argument("--engine", choices=ENGINES, default="local",
+                       help="local: a process pool (default); ray: Ray tasks (the 'ray' extra)")
+    bench.add_argument("--workers", type=_int_at_least(1), default=None,
+                       help="processes (local) or CPUs of the local Ray instance (default: this machine's)")
+    bench.add_argument("--out", type=Path, default=None, help="bench folder (default: runs/bench/SUITE)")
+    bench.add_argument("--cache", type=Path, default=None,
+                       help="datasets by content key, shareable between suites (default: OUT/datasets)")
+    bench.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
+    bench.add_argument("--quiet", action="store_true", help="no progress bar")
+    bench.set_defaults(run=_cmd_bench)
+
+    report = commands.add_parser("report", help="write reports/SUITE/index.md with plots from a bench folder")
+    report.add_argument("results", type=Path, help="a bench folder (or its results.parquet)")
+    report.add_argument("--out", type=Path, default=None, help="report folder (default: reports/SUITE)")
+    report.set_defaults(run=_cmd_report)
 
     run = commands.add_parser("run", help="generate a scenario, track it, score it and write a report")
     _scenario_arguments(run)

@@ -8,7 +8,6 @@ that runs several trackers on one drawn scenario pays for the generation once. E
 from __future__ import annotations
 
 import atexit
-import hashlib
 import shutil
 import tempfile
 from dataclasses import dataclass, field
@@ -17,7 +16,7 @@ from pathlib import Path
 from scenarios.schema import Scenario
 
 from ..dataset import Dataset
-from ..generate import generate
+from ..dataset.cache import cached_dataset, dataset_key
 from ..score import ScoreReport, score
 from ..track import run_tracker as run_on_dataset
 
@@ -61,11 +60,9 @@ def _root() -> Path:
 
 def dataset_for(scenario: Scenario, seed: int = 0, frames: int | None = None) -> Dataset:
     """The dataset of ``scenario`` and ``seed``, generated on first use in this process."""
-    key = hashlib.sha256(f"{scenario.model_dump_json()}|{seed}|{frames}".encode()).hexdigest()[:20]
+    key = dataset_key(scenario, seed, frames)
     if key not in _CACHE:
-        out = _root() / key
-        generate(scenario, seed=seed, out=out, frames=frames, overwrite=True)
-        _CACHE[key] = Dataset.open(out)
+        _CACHE[key] = cached_dataset(scenario, seed, frames, _root())
     return _CACHE[key]
 
 

@@ -1,0 +1,92 @@
+"""``run_bench``: every point of a suite, on a local pool or Ray, resumable, into one folder."""
+
+from __future__ import annotations
+
+import shlex
+from dataclasses import dataclass
+from pathlib import Path
+
+from tqdm import tqdm
+
+from ..dataset.manifest import write_json_atomic
+from .engines import ENGINES, local_engine, machine_workers, ray_engine
+from .plan import Plan, make_plan
+from .results import TABLES, assemble, finished, write_fragment, write_table_atomic
+from .suite import SuiteError, load_suite
+
+BENCH_FILE = "bench.json"
+
+
+@dataclass(frozen=True)
+class BenchRun:
+    """What a bench run did: its folder, how many points and cells the suite has, how many cells (with every
+    tracker) were already finished and how many ran now."""
+
+    out: Path
+    points: int
+    rows: int
+    cells: int
+    cells_skipped: int
+    cells_run: int
+
+    @property
+    def results(self) -> Path:
+        return self.out / TABLES[0]
+
+
+def run_bench(
+    suite: str | Path,
+    *,
+    engine: str = "local",
+    workers: int | None = None,
+    out: Path | str | None = None,
+    cache: Path | str | None = None,
+    address: str | None = None,
+    progress: bool = False,
+) -> BenchRun:
+    """Run every point of ``suite`` (a named suite or a suite file) that has not finished in ``out``
+    (default ``runs/bench/SUITE``), then write the tables. ``cache`` holds the datasets by content key
+    (default ``OUT/datasets``); ``workers`` defaults to the processors of this machine."""
+    if engine not in ENGINES:
+        raise SuiteError(f"--engine {engine!r}: choose one of {', '.join(ENGINES)}")
+    if workers is not None and workers < 1:
+        raise SuiteError(f"--workers {workers}: must be at least 1")
+    loaded, scenarios = load_suite(suite)
+    plan = make_plan(loaded, scenarios)
+    out = Path(out) if out is not None else Path("runs") / "bench" / loaded.name
+    cache = Path(cache) if cache is not None else out / "datasets"
+    out.mkdir(parents=True, exist_ok=True)
+    for name in TABLES:  # from here until the end, the folder must not look finished
+        (out / name).unlink(missing_ok=True)
+    write_json_atomic(out / BENCH_FILE, _description(plan, suite, engine, cache, complete=False))
+    jobs = plan.jobs(finished(out), cache)
+    workers = min(workers or machine_workers(), max(len(jobs), 1))
+    results = local_engine(jobs, workers) if engine == "local" else ray_engine(jobs, workers, address)
+    bar = tqdm(total=len(plan.cells), initial=len(plan.cells) - len(jobs), unit="cell", disable=not progress,
+               desc=f"bench {loaded.name}")
+    with bar:
+        for _, outcomes, dataset_s in results:
+            for outcome in outcomes:
+                write_fragment(out, outcome, dataset_s)
+            bar.update(1)
+    tables = assemble(plan, out)
+    for name, table in tables.items():
+        write_table_atomic(table, out / name)
+    write_json_atomic(out / BENCH_FILE, _description(plan, suite, engine, cache, complete=True))
+    return BenchRun(out, len(plan.points), tables[TABLES[0]].num_rows, len(plan.cells),
+                    len(plan.cells) - len(jobs), len(jobs))
+
+
+def _description(plan: Plan, suite: str | Path, engine: str, cache: Path, *, complete: bool) -> dict:
+    """bench.json: enough to rerun the suite and to regenerate any cell (the report needs one)."""
+    return {
+        "suite": plan.suite.name,
+        "command": shlex.join(["simrig", "bench", str(suite)]),
+        "suite_settings": plan.suite.model_dump(mode="json"),
+        "engine": engine,
+        "cache": str(cache),
+        "parameters": list(plan.parameters),
+        "cells": {key: {"scenario": scenario.model_dump(mode="json"), "seed": seed, "frames": frames}
+                  for key, (scenario, seed, frames) in plan.cells.items()},
+        "complete": complete,
+    }

@@ -1,0 +1,87 @@
+"""What a bench worker does with one cell: find or generate its dataset, run each pending tracker, score it.
+
+Runs in a pool process or a Ray task, so it takes and returns plain picklable values. Tracks go to a
+temporary folder and are deleted; a cell's tracks can be made again exactly (same dataset, same seed).
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..dataset.cache import cached_dataset
+from ..errors import SimrigError
+from ..score import ScoreReport, score
+from ..score.attribution import errors_by_cause
+from ..score.report import METRICS_2D, METRICS_3D
+from ..track import run_tracker
+from .plan import Job
+
+METRIC_COLUMNS = (*(f"3d_{name}" for name in METRICS_3D), *(f"2d_{name}" for name in METRICS_2D))
+"""Metric columns of the results table: ``3d_`` overall 3D metrics (nuScenes style, null for a tracker scored on
+one camera), ``2d_`` overall 2D metrics (TrackEval style; of that one camera when the tracker names one)."""
+
+
+class BenchError(SimrigError):
+    """A cell could not be evaluated; the message names the cell and the tracker."""
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One tracker on one cell: its metric values (NaN where not scored), its errors by cause as
+    (dimension, cause, kind, count) and the seconds it took (tracking ``step()``s, scoring)."""
+
+    cell: str
+    tracker_key: str
+    metrics: dict[str, float]
+    causes: tuple[tuple[str, str, str, int], ...]
+    tracking_s: float
+    scoring_s: float
+
+
+def evaluate(job: Job) -> tuple[list[Outcome], float]:
+    """Every pending tracker of ``job`` on its cell, and the seconds spent finding or generating the dataset."""
+    started = time.perf_counter()
+    where = f"cell {job.cell} ({job.scenario.name}, seed {job.seed}, {job.frames} frames)"
+    try:
+        dataset = cached_dataset(job.scenario, job.seed, job.frames, job.cache)
+    except SimrigError as error:
+        raise BenchError(f"{where}: {error}") from None
+    dataset_s = time.perf_counter() - started
+    outcomes = []
+    with tempfile.TemporaryDirectory(prefix="simrig-bench-") as folder:
+        for key, entry in job.trackers:
+            try:
+                run = run_tracker(dataset, entry.tracker, Path(folder) / key, dict(entry.params), seed=job.seed)
+                scoring_started = time.perf_counter()
+                report = score(dataset, run.out, camera=entry.camera)
+            except SimrigError as error:
+                raise BenchError(f"{where}, tracker {entry.name}: {error}") from None
+            except Exception as error:  # a user's tracker failing: keep its traceback as the cause
+                raise BenchError(f"{where}, tracker {entry.name}: {type(error).__name__}: {error}") from error
+            outcomes.append(Outcome(job.cell, key, metric_values(report), cause_counts(report),
+                                    run.step_seconds, time.perf_counter() - scoring_started))
+    return outcomes, dataset_s
+
+
+def metric_values(report: ScoreReport) -> dict[str, float]:
+    """The overall metrics of ``report`` under :data:`METRIC_COLUMNS` names; NaN where absent."""
+    overall3d = report.metrics3d["overall"] if report.metrics3d is not None else {}
+    overall2d = report.metrics2d["overall"]
+    values = {f"3d_{name}": overall3d.get(name) for name in METRICS_3D}
+    values |= {f"2d_{name}": overall2d.get(name) for name in METRICS_2D}
+    return {name: math.nan if value is None else float(value) for name, value in values.items()}
+
+
+def cause_counts(report: ScoreReport) -> tuple[tuple[str, str, str, int], ...]:
+    """(dimension, cause, kind, count) for every non-zero count of the report's errors by cause."""
+    return tuple(
+        (dimension, cause, kind, int(count))
+        for dimension, table in errors_by_cause(report.errors).items()
+        for cause, counts in table.items()
+        for kind, count in counts.items()
+        if count
+    )

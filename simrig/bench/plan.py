@@ -1,0 +1,108 @@
+"""A suite expanded into points (rows of the results table) and cells (what is generated and tracked).
+
+A **point** is (scenario, sweep, value, seed): the base settings or one swept value. A **cell** is the
+dataset a point needs, keyed by content (:func:`~simrig.dataset.cache.dataset_key`): two points with the same
+resolved scenario — a sweep value equal to the scenario's own setting, say — share one cell, which is
+generated and tracked once and reported under both.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from scenarios import Scenario
+
+from ..dataset.cache import dataset_key
+from .parameters import apply_parameter, parameter_value
+from .suite import Suite, TrackerEntry, tracker_runs_on
+
+BASE = ""
+"""The ``sweep`` of a point that runs a scenario with its own settings."""
+
+
+@dataclass(frozen=True)
+class Point:
+    """One row group of the results: ``sweep`` is the swept parameter (:data:`BASE` for none), ``value`` its
+    value (None for the base), ``settings`` the cell's value of every parameter the suite sweeps (None where
+    the parameter does not apply to the scenario)."""
+
+    scenario: str
+    rig: str
+    sweep: str
+    value: float | None
+    seed: int
+    frames: int
+    cell: str
+    settings: tuple[tuple[str, float | None], ...]
+
+
+@dataclass(frozen=True)
+class Job:
+    """One cell to generate (or find in ``cache``) and the trackers still to run on it (key, entry)."""
+
+    cell: str
+    scenario: Scenario
+    seed: int
+    frames: int
+    cache: Path
+    trackers: tuple[tuple[str, TrackerEntry], ...]
+
+
+def tracker_key(entry: TrackerEntry) -> str:
+    """Content key of a tracker entry: its spec, parameters and scored camera (not its label)."""
+    identity = {"tracker": entry.tracker, "params": entry.params, "camera": entry.camera}
+    return hashlib.sha256(json.dumps(identity, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Every point of a suite, and the cells behind them with the trackers each runs."""
+
+    suite: Suite
+    points: tuple[Point, ...]
+    cells: dict[str, tuple[Scenario, int, int]]
+    """cell key → (resolved scenario, seed, frames)."""
+    parameters: tuple[str, ...]
+
+    def trackers_of(self, scenario: Scenario) -> tuple[TrackerEntry, ...]:
+        return tuple(entry for entry in self.suite.trackers if tracker_runs_on(entry, scenario))
+
+    def work(self) -> dict[str, tuple[tuple[str, TrackerEntry], ...]]:
+        """cell key → the (tracker key, entry) pairs to run on it, in suite order."""
+        return {key: tuple((tracker_key(entry), entry) for entry in self.trackers_of(scenario))
+                for key, (scenario, _, _) in self.cells.items()}
+
+    def jobs(self, finished: set[tuple[str, str]], cache: Path) -> list[Job]:
+        """The cells with trackers not yet in ``finished`` (a set of (cell, tracker key)), in plan order."""
+        out = []
+        for key, pairs in self.work().items():
+            pending = tuple(pair for pair in pairs if (key, pair[0]) not in finished)
+            if pending:
+                scenario, seed, frames = self.cells[key]
+                out.append(Job(key, scenario, seed, frames, cache, pending))
+        return out
+
+
+def make_plan(suite: Suite, scenarios: dict[str, Scenario]) -> Plan:
+    """Points in suite order: per scenario, per seed, the base and then each sweep's values."""
+    parameters = tuple(sweep.parameter for sweep in suite.sweeps)
+    points, cells = [], {}
+    for reference, scenario in scenarios.items():
+        variants: list[tuple[str, float | None, Scenario]] = [(BASE, None, scenario)] if suite.base else []
+        for sweep in suite.sweeps:
+            if reference in suite.sweep_scenarios(sweep):
+                variants += [(sweep.parameter, float(value), apply_parameter(scenario, sweep.parameter, value))
+                             for value in sweep.values]
+        for seed in suite.seeds:
+            for sweep_name, value, variant in variants:
+                frames = suite.frames or variant.frames
+                key = dataset_key(variant, seed, frames)
+                cells.setdefault(key, (variant, seed, frames))
+                settings = tuple((sweep.parameter, parameter_value(variant, sweep.parameter)
+                                  if reference in suite.sweep_scenarios(sweep) else None) for sweep in suite.sweeps)
+                points.append(Point(scenario.name, scenario.rig.preset, sweep_name, value, seed, frames, key,
+                                    settings))
+    return Plan(suite, tuple(points), cells, parameters)

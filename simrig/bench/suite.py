@@ -1,0 +1,213 @@
+"""Bench suites: which scenarios, trackers, seeds and sweeps to run — a TOML file validated like a scenario.
+
+Named suites live in ``scenarios/suites/<name>.toml``. A suite's scenarios are catalog names or ``.toml``
+paths relative to the suite file. Example::
+
+    name = "mine"
+    scenarios = ["highway_surround6", "my_scenario.toml"]
+    seeds = [0, 1, 2]
+    frames = 100                      # optional: every scenario's own frame count when omitted
+
+    [[trackers]]
+    tracker = "saga"                  # registered name or "module:attribute"
+    [[trackers]]
+    label = "hungarian+dedup"         # shown in tables and plots; the tracker spec by default
+    tracker = "global_hungarian"
+    params = { duplicate_iou = 0.3 }
+    [[trackers]]
+    tracker = "sort"
+    camera = "left"                   # scored on that camera only, in 2D
+    rigs = ["stereo"]                 # runs only on scenarios with these rig presets
+
+    [[sweeps]]
+    parameter = "miss_probability"    # an alias (simrig.bench.parameters) or a dotted scenario path
+    values = [0.05, 0.2, 0.35, 0.5]
+    [[sweeps]]
+    parameter = "rig.overlap_deg"
+    values = [0, 10, 20, 30]
+    scenarios = ["highway_surround6"] # default: every scenario of the suite
+
+Each sweep varies one parameter from each scenario's own settings (one at a time, not a grid); ``base = true``
+(the default) also runs every scenario as it is. Everything is checked when the suite loads: every scenario,
+every tracker with its parameters, every camera, every sweep value on every scenario it applies to. An error
+names the suite file and the entry.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Annotated, Any
+
+from pydantic import Field, ValidationError, model_validator
+
+from scenarios import CATALOG_DIR, Scenario, ScenarioError, _describe, load_scenario
+from scenarios.base import Strict
+from scenarios.schema import RIG_PRESETS
+
+from ..errors import SimrigError
+from ..rig import build_rig
+from ..track import TrackingError, build_tracker
+from .parameters import ALIASES, apply_parameter, parameter_value
+
+SUITES_DIR = CATALOG_DIR / "suites"
+
+
+class SuiteError(SimrigError):
+    """A suite cannot be found or is invalid; the message names the file and the entry."""
+
+
+class TrackerEntry(Strict):
+    """One tracker of a suite: ``tracker`` with ``params``, shown as ``label``."""
+
+    tracker: Annotated[str, Field(min_length=1)]
+    label: Annotated[str, Field(min_length=1)] | None = None
+    params: dict[str, Any] = Field(default_factory=dict)
+    camera: Annotated[str, Field(min_length=1)] | None = None
+    """Score only this camera, in 2D (for per-camera trackers); every camera and 3D when omitted."""
+    rigs: tuple[str, ...] = ()
+    """Rig presets it runs on; every scenario when empty."""
+
+    @property
+    def name(self) -> str:
+        """The label, or the tracker spec with its parameters."""
+        if self.label:
+            return self.label
+        return self.tracker + "".join(f":{key}={value}" for key, value in sorted(self.params.items()))
+
+    @model_validator(mode="after")
+    def _check(self) -> TrackerEntry:
+        unknown = sorted(set(self.rigs) - set(RIG_PRESETS))
+        if unknown:
+            raise ValueError(f"rigs: unknown preset {unknown[0]!r}; known: {', '.join(RIG_PRESETS)}")
+        return self
+
+
+class Sweep(Strict):
+    """One parameter varied over ``values``, from each scenario's own settings."""
+
+    parameter: Annotated[str, Field(min_length=1)]
+    values: Annotated[tuple[float, ...], Field(min_length=1)]
+    scenarios: tuple[str, ...] = ()
+    """The suite's scenarios it applies to; all when empty."""
+
+    @model_validator(mode="after")
+    def _check(self) -> Sweep:
+        if len(set(self.values)) != len(self.values):
+            raise ValueError(f"values: listed twice in {list(self.values)}")
+        return self
+
+
+class Suite(Strict):
+    """A validated suite."""
+
+    name: Annotated[str, Field(min_length=1)]
+    description: str = ""
+    scenarios: Annotated[tuple[str, ...], Field(min_length=1)]
+    seeds: Annotated[tuple[Annotated[int, Field(ge=0)], ...], Field(min_length=1)]
+    frames: Annotated[int, Field(ge=1)] | None = None
+    """[-] frames of every cell; each scenario's own when omitted."""
+    base: bool = True
+    """Also run each scenario with its own settings (besides the sweeps)."""
+    trackers: Annotated[tuple[TrackerEntry, ...], Field(min_length=1)]
+    sweeps: tuple[Sweep, ...] = ()
+
+    @model_validator(mode="after")
+    def _check(self) -> Suite:
+        for key, items in (("seeds", self.seeds), ("scenarios", self.scenarios),
+                           ("trackers", [entry.name for entry in self.trackers]),
+                           ("sweeps", [sweep.parameter for sweep in self.sweeps])):
+            repeated = sorted({item for item in items if list(items).count(item) > 1}, key=str)
+            if repeated:
+                raise ValueError(f"{key}: {repeated[0]!r} is listed twice (tracker labels must be unique)")
+        for index, sweep in enumerate(self.sweeps):
+            foreign = sorted(set(sweep.scenarios) - set(self.scenarios))
+            if foreign:
+                raise ValueError(f"sweeps.{index}.scenarios: {foreign[0]!r} is not one of the suite's scenarios")
+        if not self.base and not self.sweeps:
+            raise ValueError("base: with base = false the suite needs at least one sweep")
+        return self
+
+    def sweep_scenarios(self, sweep: Sweep) -> tuple[str, ...]:
+        """The scenario references a sweep applies to."""
+        return sweep.scenarios or self.scenarios
+
+
+def suite_catalog() -> dict[str, Path]:
+    """Named suites by name."""
+    return {path.stem: path for path in sorted(SUITES_DIR.glob("*.toml"))}
+
+
+def _path(name_or_path: str | Path) -> Path:
+    entries = suite_catalog()
+    text = str(name_or_path)
+    if text in entries and not Path(text).suffix:
+        return entries[text]
+    path = Path(text)
+    if not path.is_file():
+        raise SuiteError(f"unknown suite {text!r}: not a named suite ({', '.join(entries)}) nor a .toml file")
+    return path
+
+
+def load_suite(name_or_path: str | Path) -> tuple[Suite, dict[str, Scenario]]:
+    """The validated suite and its scenarios by reference (as written in the suite), every check done."""
+    path = _path(name_or_path)
+    try:
+        with path.open("rb") as handle:
+            raw = tomllib.load(handle)
+    except tomllib.TOMLDecodeError as error:
+        raise SuiteError(f"suite file {str(path)!r}: not valid TOML: {error}") from None
+    raw.setdefault("name", path.stem)
+    try:
+        suite = Suite.model_validate(raw)
+    except ValidationError as error:
+        raise SuiteError(f"suite file {str(path)!r}: {_describe(error)}") from None
+    where = f"suite file {str(path)!r}"
+    scenarios = {}
+    for index, reference in enumerate(suite.scenarios):
+        target = reference if Path(reference).suffix != ".toml" else path.parent / reference
+        try:
+            scenarios[reference] = load_scenario(target)
+        except ScenarioError as error:
+            raise SuiteError(f"{where}: scenarios.{index}: {error}") from None
+    _check_trackers(suite, scenarios, where)
+    _check_sweeps(suite, scenarios, where)
+    return suite, scenarios
+
+
+def tracker_runs_on(entry: TrackerEntry, scenario: Scenario) -> bool:
+    """Whether the suite runs ``entry`` on ``scenario`` (its ``rigs`` filter)."""
+    return not entry.rigs or scenario.rig.preset in entry.rigs
+
+
+def _check_trackers(suite: Suite, scenarios: dict[str, Scenario], where: str) -> None:
+    for index, entry in enumerate(suite.trackers):
+        try:
+            build_tracker(entry.tracker, dict(entry.params))
+        except TrackingError as error:
+            raise SuiteError(f"{where}: trackers.{index} ({entry.name}): {error}") from None
+        targets = [s for s in scenarios.values() if tracker_runs_on(entry, s)]
+        if not targets:
+            raise SuiteError(f"{where}: trackers.{index} ({entry.name}): rigs {list(entry.rigs)} match none of "
+                             "the suite's scenarios")
+        if entry.camera is not None:
+            for scenario in targets:
+                names = build_rig(scenario.rig).camera_names
+                if entry.camera not in names:
+                    raise SuiteError(f"{where}: trackers.{index} ({entry.name}): camera {entry.camera!r} is not "
+                                     f"in the rig of {scenario.name} ({', '.join(names)}); limit it with rigs")
+
+
+def _check_sweeps(suite: Suite, scenarios: dict[str, Scenario], where: str) -> None:
+    for index, sweep in enumerate(suite.sweeps):
+        if "." not in sweep.parameter and sweep.parameter not in ALIASES:
+            raise SuiteError(f"{where}: sweeps.{index}.parameter: {sweep.parameter!r} is neither a dotted scenario "
+                             f"path (e.g. 'rig.overlap_deg') nor an alias ({', '.join(ALIASES)})")
+        for reference in suite.sweep_scenarios(sweep):
+            try:
+                parameter_value(scenarios[reference], sweep.parameter)
+                for value in sweep.values:
+                    apply_parameter(scenarios[reference], sweep.parameter, value)
+            except (ScenarioError, ValueError) as error:
+                raise SuiteError(f"{where}: sweeps.{index} ({sweep.parameter}) on {reference}: {error}; "
+                                 "limit the sweep with scenarios = [...]") from None
