@@ -55,12 +55,13 @@ def _camera_images(dataset: Dataset, state: GroundTruthFrame) -> dict[str, np.nd
         return {name: np.asarray(Image.open(images / name / f"{state.frame:06d}.png")) for name in names}
     from .render.scene import RigScene
 
-    scene = RigScene(_markings(dataset))
+    scene = RigScene(road_markings(dataset))
     scene.set_frame(state.ego, state.classes, state.boxes)
     return {camera.name: scene.colour(camera, dataset.rig, state.ego) for camera in dataset.rig.cameras}
 
 
-def _markings(dataset: Dataset) -> RoadMarkings | None:
+def road_markings(dataset: Dataset) -> RoadMarkings | None:
+    """The painted lines of the dataset's road (world frame), or None if it recorded none."""
     path = dataset.path / "road.json"
     if not path.exists():
         return None
@@ -94,7 +95,7 @@ def _draw_bev(axis, dataset: Dataset, state: GroundTruthFrame, detections) -> No
     def to_ego(points: np.ndarray) -> np.ndarray:
         return (points - [ego.x, ego.y]) @ rotation.T
 
-    markings = _markings(dataset)
+    markings = road_markings(dataset)
     if markings is not None:
         segments = [to_ego(dash_segments(line, dashed).reshape(-1, 2)).reshape(-1, 2, 2)
                     for line, dashed in zip(markings.lines, markings.dashed, strict=True)]

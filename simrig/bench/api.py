@@ -58,7 +58,7 @@ def run_bench(
     out.mkdir(parents=True, exist_ok=True)
     for name in TABLES:  # from here until the end, the folder must not look finished
         (out / name).unlink(missing_ok=True)
-    write_json_atomic(out / BENCH_FILE, _description(plan, suite, engine, cache, complete=False))
+    write_json_atomic(out / BENCH_FILE, _description(plan, suite, out, engine, cache, complete=False))
     jobs = plan.jobs(finished(out), cache)
     workers = min(workers or machine_workers(), max(len(jobs), 1))
     results = local_engine(jobs, workers) if engine == "local" else ray_engine(jobs, workers, address)
@@ -72,16 +72,17 @@ def run_bench(
     tables = assemble(plan, out)
     for name, table in tables.items():
         write_table_atomic(table, out / name)
-    write_json_atomic(out / BENCH_FILE, _description(plan, suite, engine, cache, complete=True))
+    write_json_atomic(out / BENCH_FILE, _description(plan, suite, out, engine, cache, complete=True))
     return BenchRun(out, len(plan.points), tables[TABLES[0]].num_rows, len(plan.cells),
                     len(plan.cells) - len(jobs), len(jobs))
 
 
-def _description(plan: Plan, suite: str | Path, engine: str, cache: Path, *, complete: bool) -> dict:
+def _description(plan: Plan, suite: str | Path, out: Path, engine: str, cache: Path, *, complete: bool) -> dict:
     """bench.json: enough to rerun the suite and to regenerate any cell (the report needs one)."""
     return {
         "suite": plan.suite.name,
-        "command": shlex.join(["simrig", "bench", str(suite)]),
+        "command": shlex.join(["simrig", "bench", str(suite), "--out", str(out)]),
+        "out": str(out),
         "suite_settings": plan.suite.model_dump(mode="json"),
         "engine": engine,
         "cache": str(cache),

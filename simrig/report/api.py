@@ -1,0 +1,128 @@
+"""``write_report``: ``reports/<suite>/index.md`` from a finished bench folder, with its PNGs beside it."""
+
+from __future__ import annotations
+
+import shlex
+import shutil
+from pathlib import Path
+
+from ..bench.api import BENCH_FILE
+from ..bench.results import CAUSES, RESULTS
+from .curves import curve_table, plot_sweep, plot_sweep_by_scenario
+from .groups import groups
+from .load import BenchResults, load_bench
+from .markdown import table
+from .summary import causes_table, scenario_table, tracker_table
+from .worst_cell import inspect_worst
+
+
+def write_report(results: Path | str, *, out: Path | str | None = None) -> Path:
+    """Write the report of the bench folder ``results`` into ``out`` (default ``reports/SUITE``): index.md,
+    the figures, and copies of the results, causes and bench description it was made from (so that
+    ``simrig report OUT`` makes it again). Returns the path of index.md."""
+    bench = load_bench(results)
+    out = Path(out) if out is not None else Path("reports") / bench.suite
+    out.mkdir(parents=True, exist_ok=True)
+    for name in (RESULTS, CAUSES, BENCH_FILE):
+        if (bench.folder / name).resolve() != (out / name).resolve():
+            shutil.copyfile(bench.folder / name, out / name)
+    lines = _header(bench, out)
+    lines += _results_section(bench)
+    lines += _curves_section(bench, out)
+    lines += _causes_section(bench)
+    lines += _worst_section(bench, out)
+    index = out / "index.md"
+    index.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return index
+
+
+def _header(bench: BenchResults, out: Path) -> list[str]:
+    settings = bench.description["suite_settings"]
+    frame = bench.results
+    return [
+        f"# Bench report: `{bench.suite}`", "",
+        settings.get("description", ""), "",
+        f"Produced by `{bench.description['command']}` then `simrig report {bench.description['out']}"
+        f"{'' if out == Path('reports') / bench.suite else f' --out {out}'}`. {frame['scenario'].nunique()} scenarios, seeds "
+        f"{', '.join(str(s) for s in settings['seeds'])}; {len(bench.description['cells'])} cells (distinct "
+        f"datasets), {len(frame)} result rows (point × tracker). The tables here are `{RESULTS}` and `{CAUSES}` "
+        "in this folder.", "",
+        "Each scenario runs at its own settings (the *base* points) and, for each sweep, with one parameter "
+        "changed. HOTA, AssA and IDF1 are TrackEval's 2D metrics; AMOTA, MOTA, IDS and FRAG nuScenes' 3D "
+        "ones. A tracker scored on one camera is compared only with others scored there.", "",
+    ]
+
+
+def _results_section(bench: BenchResults) -> list[str]:
+    lines = ["## Results per tracker", "",
+             "At each scenario's own settings: metrics are means over scenarios and seeds, counts are sums.", ""]
+    for group in groups(bench.results):
+        lines += [f"### {group.title}", ""] + tracker_table(bench, group) + [""]
+        lines += ["Per scenario: HOTA, mean over seeds (identity switches, summed over seeds).", ""]
+        lines += scenario_table(bench, group) + [""]
+    return lines
+
+
+def _curves_section(bench: BenchResults, out: Path) -> list[str]:
+    lines = ["## Robustness curves", ""]
+    found = groups(bench.results)
+    for parameter in bench.description["parameters"]:
+        slug = parameter.replace(".", "_")
+        lines += [f"### {parameter}", ""]
+        figure = plot_sweep(bench, parameter, found, out / f"curves-{slug}.png")
+        if figure is None:
+            lines += ["No points.", ""]
+            continue
+        lines += [f"![metrics against {parameter}]({figure.name})", ""]
+        for group in found:
+            for metric, name in group.curve_metrics[:1] + group.curve_metrics[-1:]:
+                numbers = curve_table(bench, parameter, group, metric, name)
+                if numbers:
+                    where = "" if group.key == "3d" else f" (camera {group.key})"
+                    lines += [f"{name}{where}, mean over seeds of the mean over scenarios:", ""] + numbers + [""]
+        by_scenario = plot_sweep_by_scenario(bench, parameter, out / f"curves-{slug}-by-scenario.png")
+        if by_scenario is not None:
+            lines += [f"![HOTA against {parameter} per scenario]({by_scenario.name})", ""]
+    return lines
+
+
+def _causes_section(bench: BenchResults) -> list[str]:
+    lines = ["## Errors by cause", "",
+             "Over every cell of the suite. An error with several causes counts under each; `total` counts it "
+             "once. `none`: no cause found in the look-back window.", ""]
+    for group in groups(bench.results):
+        where = "3D" if group.key == "3d" else f"2D, camera {group.key}"
+        for kind, name in (("IDS", "Identity switches"), ("FN", "Missed boxes (FN)")):
+            lines += [f"{name} by cause ({where}):", ""] + causes_table(bench, group, kind) + [""]
+    return lines
+
+
+def _worst_section(bench: BenchResults, out: Path) -> list[str]:
+    worst = inspect_worst(bench, out)
+    row = worst.row
+    entry = bench.trackers[0]
+    point = f"{row['sweep']} = {row['value']:g}" if row["sweep"] else "its own settings"
+    lines = ["## Worst cell", "",
+             f"The cell where `{entry['name']}` (the suite's first tracker) switches identities most: "
+             f"`{row['scenario']}` with {point}, seed {row['seed']} (cell `{row['cell']}`), HOTA "
+             f"{row['2d_HOTA']:.3f}. Its dataset is `{Path(bench.description['cache']) / row['cell']}` "
+             f"(`simrig bench` makes it again if missing): `simrig track` it with `{_tracker_arguments(entry)}` "
+             "and `simrig score` the tracks to see every error.", "",
+             f"![bird's-eye view of the worst cell]({worst.bev.name})", "",
+             f"Camera mosaic at frame {worst.mosaic_frame} (the first switch): solid boxes ground truth, dashed "
+             "boxes detections.", "",
+             f"![camera mosaic of the worst cell]({worst.mosaic.name})", ""]
+    if worst.switches:
+        rows = [[str(s["frame"]), s["camera"] or "-", s["class"], str(s["actor_id"]),
+                 f"{s['previous_track_id']} → {s['track_id']}", ", ".join(s["causes"]) or "none"]
+                for s in worst.switches]
+        lines += table(["frame", "camera", "class", "actor", "track", "causes"], rows) + [""]
+    return lines
+
+
+def _tracker_arguments(entry: dict) -> str:
+    """The ``simrig track`` arguments of a suite's tracker entry."""
+    words = ["--tracker", entry["tracker"]]
+    for key, value in (entry.get("params") or {}).items():
+        words += ["--param", f"{key}={value}"]
+    return shlex.join(words)

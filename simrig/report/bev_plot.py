@@ -1,0 +1,83 @@
+"""A whole sequence from above, in the world frame: every ground-truth trajectory, every track of a tracker,
+and where its identity switches happened."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pyarrow as pa  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+
+from ..dataset import Dataset  # noqa: E402
+from ..mosaic import identity_colour, road_markings  # noqa: E402
+from ..render.road import dash_segments  # noqa: E402
+
+MARGIN_M = 10.0
+"""[m] around the ground-truth and ego trajectories."""
+
+
+def _paths(table: pa.Table, key: str) -> dict[int, np.ndarray]:
+    """``(K, 2)`` world (x, y) [m] per id, in frame order."""
+    ids = table.column(key).to_numpy()
+    frames = table.column("frame").to_numpy()
+    xy = np.column_stack([table.column("x").to_numpy(), table.column("y").to_numpy()])
+    order = np.lexsort((frames, ids))
+    ids, xy = ids[order], xy[order]
+    starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
+    return {int(ids[s]): xy[s:e] for s, e in zip(starts, np.r_[starts[1:], len(ids)], strict=True)}
+
+
+def plot_bev(dataset: Dataset, tracks3d: pa.Table | None, switches: list[tuple[int, int, str]], title: str,
+             out: Path) -> Path:
+    """Ground truth (grey), the ego (black), tracks (a colour per track id) and identity switches (red ×,
+    numbered in time order; ``switches`` are (frame, actor id, label)) of ``dataset``."""
+    truth = dataset.table("ground_truth")
+    ego = dataset.table("ego_poses")
+    truth_paths = _paths(truth, "actor_id")
+    points = [np.column_stack([ego.column("x").to_numpy(), ego.column("y").to_numpy()])]
+    points += list(truth_paths.values())
+    everything = np.concatenate(points)  # the view fits the road traffic; a track that wanders off is cut
+    low, high = everything.min(axis=0) - MARGIN_M, everything.max(axis=0) + MARGIN_M
+    span = high - low
+    equal = span.max() / max(span.min(), 1e-9) <= 6.0
+    width = 16.0
+    height = float(np.clip(width * span[1] / span[0], 3.5, 12.0)) if equal else 5.0
+    figure, axis = plt.subplots(figsize=(width, height + 0.8), dpi=100)
+    markings = road_markings(dataset)
+    if markings is not None:
+        segments = [dash_segments(line, dashed) for line, dashed in zip(markings.lines, markings.dashed, strict=True)]
+        axis.add_collection(LineCollection(np.concatenate(segments), colors="0.8", linewidths=0.6))
+    for path in truth_paths.values():
+        axis.plot(path[:, 0], path[:, 1], color="0.55", linewidth=2.4, alpha=0.5, solid_capstyle="round")
+    axis.plot(points[0][:, 0], points[0][:, 1], color="black", linewidth=1.5, label="ego")
+    if tracks3d is not None:
+        for track_id, path in _paths(tracks3d, "track_id").items():
+            axis.plot(path[:, 0], path[:, 1], color=identity_colour(track_id), linewidth=0.9)
+    position = {(f, a): (x, y) for f, a, x, y in zip(
+        truth.column("frame").to_pylist(), truth.column("actor_id").to_pylist(),
+        truth.column("x").to_pylist(), truth.column("y").to_pylist(), strict=True)}
+    marked = [(position[(frame, actor)], label) for frame, actor, label in sorted(switches)
+              if (frame, actor) in position]
+    for number, ((x, y), label) in enumerate(marked, start=1):
+        axis.plot(x, y, marker="x", color="red", markersize=10, markeredgewidth=2.2,
+                  label="identity switch" if number == 1 else None)
+        axis.annotate(f"{number}: {label}", (x, y), textcoords="offset points", xytext=(4, 5), fontsize=7,
+                      color="darkred")
+    axis.set_xlim(low[0], high[0])
+    axis.set_ylim(low[1], high[1])
+    axis.set_aspect("equal" if equal else "auto")
+    axis.set_xlabel("world x [m]")
+    axis.set_ylabel("world y [m]")
+    axis.set_title(title + ("" if equal else " (axes not to scale)"), fontsize=10)
+    axis.plot([], [], color="0.55", linewidth=2.4, alpha=0.5, label="ground truth")
+    axis.plot([], [], color="tab:blue", linewidth=0.9, label="tracks (a colour per id)")
+    axis.legend(fontsize=8, loc="upper left")
+    figure.tight_layout()
+    figure.savefig(out)
+    plt.close(figure)
+    return out

@@ -1,0 +1,61 @@
+"""A finished bench folder, read for reporting: its results and causes as data frames and its description."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+import pyarrow.parquet as pq
+
+from ..bench.api import BENCH_FILE
+from ..bench.results import CAUSES, RESULTS
+from ..errors import SimrigError
+
+
+class ReportError(SimrigError):
+    """A bench folder cannot be reported on; the message names the folder and what is missing."""
+
+
+@dataclass(frozen=True)
+class BenchResults:
+    """``results``: one row per point × tracker; ``causes``: errors by cause; ``description``: bench.json."""
+
+    folder: Path
+    results: pd.DataFrame
+    causes: pd.DataFrame
+    description: dict
+
+    @property
+    def suite(self) -> str:
+        return self.description["suite"]
+
+    @property
+    def trackers(self) -> list[dict]:
+        """The suite's tracker entries in suite order, each with its ``name`` (label) added."""
+        names = list(dict.fromkeys(self.results["tracker"]))
+        return [entry | {"name": name}
+                for entry, name in zip(self.description["suite_settings"]["trackers"], names, strict=True)]
+
+    def unique_cells(self, frame: pd.DataFrame) -> pd.DataFrame:
+        """``frame`` with one row per (cell, tracker): a cell shared by two points counts once."""
+        return frame.drop_duplicates(["cell", "tracker"] + (["dimension", "cause", "kind"]
+                                                            if "cause" in frame.columns else []))
+
+
+def load_bench(path: Path | str) -> BenchResults:
+    """The bench folder ``path`` (or the folder of ``path`` = its results.parquet), which must be complete."""
+    folder = Path(path)
+    if folder.is_file():
+        folder = folder.parent
+    description_path = folder / BENCH_FILE
+    try:
+        description = json.loads(description_path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ReportError(f"{str(folder)!r} is not a bench folder: it has no {BENCH_FILE}") from None
+    if not description.get("complete") or not (folder / RESULTS).is_file():
+        raise ReportError(f"bench in {str(folder)!r} did not finish; run '{description.get('command')}' again "
+                          "to complete it")
+    return BenchResults(folder, pq.read_table(folder / RESULTS).to_pandas(),
+                        pq.read_table(folder / CAUSES).to_pandas(), description)

@@ -1,0 +1,62 @@
+"""The report's tables: results per tracker, per scenario, and errors by cause."""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from ..score.attribution import ATTRIBUTION_CAUSES
+from .groups import COUNT_COLUMNS, Group
+from .load import BenchResults
+from .markdown import number, table
+
+
+def base_rows(bench: BenchResults) -> pd.DataFrame:
+    """The points at each scenario's own settings (the sweeps' values equal to them included once)."""
+    return bench.results[bench.results["sweep"] == ""]
+
+
+def tracker_table(bench: BenchResults, group: Group) -> list[str]:
+    """Rows: trackers of ``group``; columns: its metrics over the base points (mean over scenarios and seeds;
+    counts summed)."""
+    rows = base_rows(bench)
+    rows = rows[rows["scored"] == group.key]
+    out = []
+    for tracker, frame in rows.groupby("tracker", sort=False):
+        cells = [f"`{tracker}`", str(frame["scenario"].nunique()), str(len(frame))]
+        for column, _ in group.metrics:
+            values = frame[column]
+            cells.append(number(values.sum() if column in COUNT_COLUMNS else values.mean()))
+        out.append(cells)
+    header = ["tracker", "scenarios", "sequences"] + [
+        f"{name} (sum)" if column in COUNT_COLUMNS else name for column, name in group.metrics]
+    return table(header, out)
+
+
+def scenario_table(bench: BenchResults, group: Group) -> list[str]:
+    """Rows: scenarios; columns: trackers of ``group``; cells: HOTA (mean over seeds) and identity switches
+    (summed over seeds)."""
+    rows = base_rows(bench)
+    rows = rows[rows["scored"] == group.key]
+    trackers = list(dict.fromkeys(rows["tracker"]))
+    out = []
+    for scenario, frame in rows.groupby("scenario", sort=False):
+        cells = [f"`{scenario}`"]
+        for tracker in trackers:
+            mine = frame[frame["tracker"] == tracker]
+            cells.append("-" if mine.empty else
+                         f"{number(mine['2d_HOTA'].mean())} ({number(mine[group.switches].sum())})")
+        out.append(cells)
+    return table(["scenario"] + [f"`{t}`" for t in trackers], out)
+
+
+def causes_table(bench: BenchResults, group: Group, kind: str) -> list[str]:
+    """Rows: trackers of ``group``; columns: causes; cells: how many errors of ``kind`` (IDS or FN) carry the
+    cause, over every cell of the suite (an error with two causes counts under both; ``total`` once)."""
+    causes = bench.unique_cells(bench.causes)
+    causes = causes[(causes["scored"] == group.key) & (causes["dimension"] == group.dimension)
+                    & (causes["kind"] == kind)]
+    trackers = list(dict.fromkeys(bench.results.loc[bench.results["scored"] == group.key, "tracker"]))
+    present = [cause for cause in (*ATTRIBUTION_CAUSES, "total") if cause in set(causes["cause"])]
+    counts = causes.groupby(["tracker", "cause"])["count"].sum()
+    out = [[f"`{tracker}`"] + [int(counts.get((tracker, cause), 0)) for cause in present] for tracker in trackers]
+    return table(["tracker"] + present, out)
