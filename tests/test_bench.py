@@ -56,6 +56,15 @@ def test_results_have_one_row_per_point_and_tracker(smoke_local):
     same = rows[(rows["sweep"] == "rig.overlap_deg") & (rows["value"] == 10.0)]
     assert list(base["cell"]) == list(same["cell"])
     assert np.array_equal(base["2d_HOTA"].to_numpy(), same["2d_HOTA"].to_numpy())
+    # causes.parquet's totals are the rows' identity switches, row by row
+    causes = pq.read_table(smoke_local.out / "causes.parquet").to_pandas()
+    totals = causes[(causes["cause"] == "total") & (causes["kind"] == "IDS")]
+    for row in rows.to_dict("records"):
+        dimension, column = ("3d", "3d_IDS") if row["scored"] == "3d" else ("2d", "2d_IDSW")
+        mine = totals[(totals["cell"] == row["cell"]) & (totals["tracker"] == row["tracker"])
+                      & (totals["dimension"] == dimension) & (totals["sweep"] == row["sweep"])
+                      & (totals["seed"] == row["seed"])]
+        assert mine["count"].sum() == row[column]
 
 
 def test_a_row_equals_a_direct_run_of_its_cell(smoke_local, tmp_path):

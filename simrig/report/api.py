@@ -43,7 +43,8 @@ def _header(bench: BenchResults, out: Path) -> list[str]:
         f"# Bench report: `{bench.suite}`", "",
         settings.get("description", ""), "",
         f"Produced by `{bench.description['command']}` then `simrig report {bench.description['out']}"
-        f"{'' if out == Path('reports') / bench.suite else f' --out {out}'}`. {frame['scenario'].nunique()} scenarios, seeds "
+        f"{'' if out == Path('reports') / bench.suite else f' --out {out}'}`. "
+        f"{frame['scenario'].nunique()} scenarios, seeds "
         f"{', '.join(str(s) for s in settings['seeds'])}; {len(bench.description['cells'])} cells (distinct "
         f"datasets), {len(frame)} result rows (point × tracker). The tables here are `{RESULTS}` and `{CAUSES}` "
         "in this folder.", "",
@@ -113,10 +114,11 @@ def _worst_section(bench: BenchResults, out: Path) -> list[str]:
              "boxes detections.", "",
              f"![camera mosaic of the worst cell]({worst.mosaic.name})", ""]
     if worst.switches:
-        rows = [[str(s["frame"]), s["camera"] or "-", s["class"], str(s["actor_id"]),
+        rows = [[str(number), str(s["frame"]), s["camera"] or "-", s["class"], str(s["actor_id"]),
                  f"{s['previous_track_id']} → {s['track_id']}", ", ".join(s["causes"]) or "none"]
-                for s in worst.switches]
-        lines += table(["frame", "camera", "class", "actor", "track", "causes"], rows) + [""]
+                for number, s in enumerate(worst.switches, start=1)]
+        lines += ["The switches, numbered as on the plot:", ""]
+        lines += table(["#", "frame", "camera", "class", "actor", "track", "causes"], rows) + [""]
     return lines
 
 

@@ -32,10 +32,10 @@ def _paths(table: pa.Table, key: str) -> dict[int, np.ndarray]:
     return {int(ids[s]): xy[s:e] for s, e in zip(starts, np.r_[starts[1:], len(ids)], strict=True)}
 
 
-def plot_bev(dataset: Dataset, tracks3d: pa.Table | None, switches: list[tuple[int, int, str]], title: str,
+def plot_bev(dataset: Dataset, tracks3d: pa.Table | None, switches: list[tuple[int, int]], title: str,
              out: Path) -> Path:
     """Ground truth (grey), the ego (black), tracks (a colour per track id) and identity switches (red ×,
-    numbered in time order; ``switches`` are (frame, actor id, label)) of ``dataset``."""
+    each with its number in ``switches``, a list of (frame, actor id) in the order they are numbered)."""
     truth = dataset.table("ground_truth")
     ego = dataset.table("ego_poses")
     truth_paths = _paths(truth, "actor_id")
@@ -61,13 +61,13 @@ def plot_bev(dataset: Dataset, tracks3d: pa.Table | None, switches: list[tuple[i
     position = {(f, a): (x, y) for f, a, x, y in zip(
         truth.column("frame").to_pylist(), truth.column("actor_id").to_pylist(),
         truth.column("x").to_pylist(), truth.column("y").to_pylist(), strict=True)}
-    marked = [(position[(frame, actor)], label) for frame, actor, label in sorted(switches)
-              if (frame, actor) in position]
-    for number, ((x, y), label) in enumerate(marked, start=1):
+    for number, key in enumerate(switches, start=1):
+        if key not in position:
+            continue
+        x, y = position[key]
         axis.plot(x, y, marker="x", color="red", markersize=10, markeredgewidth=2.2,
-                  label="identity switch" if number == 1 else None)
-        axis.annotate(f"{number}: {label}", (x, y), textcoords="offset points", xytext=(4, 5), fontsize=7,
-                      color="darkred")
+                  label="identity switch (numbered)" if number == 1 else None)
+        axis.annotate(str(number), (x, y), textcoords="offset points", xytext=(4, 5), fontsize=8, color="darkred")
     axis.set_xlim(low[0], high[0])
     axis.set_ylim(low[1], high[1])
     axis.set_aspect("equal" if equal else "auto")

@@ -78,13 +78,13 @@ def inspect_worst(bench: BenchResults, out: Path) -> WorstCell:
                               "does not match this simrig (rerun the bench)")
         tracks_file = run.out / TRACKS3D_FILE
         tracks3d = pq.read_table(tracks_file) if tracks_file.exists() else None
-        labels = [(int(s.frame), int(s.actor_id),
-                   f"f{int(s.frame)} {int(s.previous_track_id)}→{int(s.track_id)} {'+'.join(s.causes) or 'none'}")
-                  for s in switches.itertuples()]
+        switches = switches.sort_values(["frame", "actor_id"], kind="stable")
+        numbered = [(int(frame), int(actor)) for frame, actor in zip(switches["frame"], switches["actor_id"],
+                                                                     strict=True)]
         title = (f"{row['scenario']} seed {row['seed']}" + (f", {row['sweep']} = {row['value']:g}" if row["sweep"]
                  else "") + f": {entry['name']}, {len(switches)} identity switches")
-        bev = plot_bev(dataset, tracks3d, labels, title, out / "worst-bev.png")
+        bev = plot_bev(dataset, tracks3d, numbered, title, out / "worst-bev.png")
         frame = int(switches["frame"].min()) if len(switches) else dataset.frame_count // 2
         mosaic = render_mosaic(dataset.path, frame, out / "worst-mosaic.png")
     listed = switches[["frame", "camera", "class", "actor_id", "previous_track_id", "track_id", "causes"]]
-    return WorstCell(row, listed.sort_values(["frame", "actor_id"]).to_dict("records"), bev, mosaic, frame)
+    return WorstCell(row, listed.to_dict("records"), bev, mosaic, frame)
