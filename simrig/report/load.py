@@ -11,6 +11,7 @@ import pyarrow.parquet as pq
 
 from ..bench.api import BENCH_FILE
 from ..bench.results import CAUSES, RESULTS
+from ..bench.suite import TrackerEntry
 from ..errors import SimrigError
 
 
@@ -34,9 +35,8 @@ class BenchResults:
     @property
     def trackers(self) -> list[dict]:
         """The suite's tracker entries in suite order, each with its ``name`` (label) added."""
-        names = list(dict.fromkeys(self.results["tracker"]))
-        return [entry | {"name": name}
-                for entry, name in zip(self.description["suite_settings"]["trackers"], names, strict=True)]
+        return [entry | {"name": TrackerEntry.model_validate(entry).name}
+                for entry in self.description["suite_settings"]["trackers"]]
 
     def unique_cells(self, frame: pd.DataFrame) -> pd.DataFrame:
         """``frame`` with one row per (cell, tracker): a cell shared by two points counts once."""
