@@ -196,3 +196,13 @@ def test_report_shows_the_tables(smoke_local, tmp_path):
     # the report's own copies make it again
     assert f"Produced by `simrig bench smoke --out {smoke_local.out}` then `simrig report {smoke_local.out}" in text
     assert write_report(tmp_path / "report", out=tmp_path / "report").read_text() == text
+
+
+def test_a_second_bench_in_the_same_folder_stops_at_once(tmp_path):
+    from simrig.bench.api import folder_lock
+
+    out = tmp_path / "busy"
+    out.mkdir()
+    with folder_lock(out), pytest.raises(BenchError, match="is in use by another simrig bench"):
+        run_bench(_tiny(tmp_path / "suite"), out=out, workers=1)
+    assert not (out / "fragments").exists()

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import fcntl
 import shlex
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -10,11 +13,13 @@ from tqdm import tqdm
 
 from ..dataset.manifest import write_json_atomic
 from .engines import ENGINES, local_engine, machine_workers, ray_engine
+from .evaluate import BenchError
 from .plan import Plan, make_plan
 from .results import TABLES, assemble, finished, write_fragment, write_table_atomic
 from .suite import SuiteError, load_suite
 
 BENCH_FILE = "bench.json"
+LOCK_FILE = ".lock"
 
 
 @dataclass(frozen=True)
@@ -56,6 +61,13 @@ def run_bench(
     out = Path(out) if out is not None else Path("runs") / "bench" / loaded.name
     cache = Path(cache) if cache is not None else out / "datasets"
     out.mkdir(parents=True, exist_ok=True)
+    with folder_lock(out):
+        return _run(plan, suite, out, cache, engine, workers, address, progress)
+
+
+def _run(plan: Plan, suite: str | Path, out: Path, cache: Path, engine: str, workers: int | None,
+         address: str | None, progress: bool) -> BenchRun:
+    loaded = plan.suite
     for name in TABLES:  # from here until the end, the folder must not look finished
         (out / name).unlink(missing_ok=True)
     write_json_atomic(out / BENCH_FILE, _description(plan, suite, out, engine, cache, complete=False))
@@ -75,6 +87,21 @@ def run_bench(
     write_json_atomic(out / BENCH_FILE, _description(plan, suite, out, engine, cache, complete=True))
     return BenchRun(out, len(plan.points), tables[TABLES[0]].num_rows, len(plan.cells),
                     len(plan.cells) - len(jobs), len(jobs))
+
+
+@contextmanager
+def folder_lock(out: Path) -> Iterator[None]:
+    """Hold ``OUT/.lock`` for this process: a second bench in the same folder stops at once, naming it."""
+    handle = (out / LOCK_FILE).open("a+")
+    try:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise BenchError(f"bench folder {str(out)!r} is in use by another simrig bench; wait for it or "
+                             "choose another --out") from None
+        yield
+    finally:
+        handle.close()
 
 
 def _description(plan: Plan, suite: str | Path, out: Path, engine: str, cache: Path, *, complete: bool) -> dict:
