@@ -24,7 +24,8 @@ CATALOG_DIR = Path(__file__).resolve().parent
 DEFAULT_SCENARIO = "highway_surround6"
 _NAMED_MESSAGE = re.compile(r"^([a-z_]+(?:, [a-z_]+)*): (.*)$")
 
-__all__ = ["CATALOG_DIR", "DEFAULT_SCENARIO", "Scenario", "ScenarioError", "catalog", "load_scenario"]
+__all__ = ["CATALOG_DIR", "DEFAULT_SCENARIO", "Scenario", "ScenarioError", "catalog", "describe_errors",
+           "load_scenario"]
 
 
 class ScenarioError(ValueError):
@@ -79,7 +80,7 @@ def _resolve(path: Path, chain: tuple[Path, ...]) -> dict[str, Any]:
     return _merge(base, raw)
 
 
-def _describe(error: ValidationError) -> str:
+def describe_errors(error: ValidationError) -> str:
     """One line per pydantic error folded into one line: 'key.path: message'."""
     parts = []
     for item in error.errors():
@@ -117,4 +118,4 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     try:
         return Scenario.model_validate(raw)
     except ValidationError as error:
-        raise ScenarioError(f"scenario file {str(path)!r}: {_describe(error)}") from None
+        raise ScenarioError(f"scenario file {str(path)!r}: {describe_errors(error)}") from None

@@ -18,7 +18,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from . import ScenarioError, _describe
+from . import ScenarioError, describe_errors
 from .schema import Scenario
 
 
@@ -64,4 +64,4 @@ def with_setting(scenario: Scenario, path: str, value: Any) -> Scenario:
     try:
         return Scenario.model_validate(raw)
     except ValidationError as error:
-        raise ScenarioError(f"scenario {scenario.name!r} with {path} = {value!r}: {_describe(error)}") from None
+        raise ScenarioError(f"scenario {scenario.name!r} with {path} = {value!r}: {describe_errors(error)}") from None

@@ -41,7 +41,7 @@ from typing import Annotated, Any
 
 from pydantic import Field, ValidationError, model_validator
 
-from scenarios import CATALOG_DIR, Scenario, ScenarioError, _describe, load_scenario
+from scenarios import CATALOG_DIR, Scenario, ScenarioError, describe_errors, load_scenario
 from scenarios.base import Strict
 from scenarios.schema import RIG_PRESETS
 
@@ -161,7 +161,7 @@ def load_suite(name_or_path: str | Path) -> tuple[Suite, dict[str, Scenario]]:
     try:
         suite = Suite.model_validate(raw)
     except ValidationError as error:
-        raise SuiteError(f"suite file {str(path)!r}: {_describe(error)}") from None
+        raise SuiteError(f"suite file {str(path)!r}: {describe_errors(error)}") from None
     where = f"suite file {str(path)!r}"
     scenarios = {}
     for index, reference in enumerate(suite.scenarios):

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import math
 
-COUNT_PREFIXES = ("IDS", "IDSW", "FN", "FP", "FRAG")
-
 
 def number(value, digits: int = 3) -> str:
     """``value`` for a table: ``-`` for a missing one, integers without decimals."""
