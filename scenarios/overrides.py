@@ -4,7 +4,7 @@ A path names nested keys with dots and list items by index: ``rig.overlap_deg``,
 ``sensor.detection.probability``, ``perturbations.0.frames.1``. The changed scenario is validated again, so a
 value out of range, or a key that does not apply to the scenario's preset, is a :class:`ScenarioError`.
 
->>> from scenarios import load_scenario
+>>> from simrig.scenarios import load_scenario
 >>> with_setting(load_scenario("highway_surround6"), "rig.overlap_deg", 20.0).rig.overlap_deg
 20.0
 >>> get_setting(load_scenario("highway_surround6"), "traffic.vehicles")

@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from scenarios import DEFAULT_SCENARIO, ScenarioError, catalog, load_scenario
+from simrig.scenarios import DEFAULT_SCENARIO, ScenarioError, catalog, load_scenario
 
 from .errors import SimrigError
 
@@ -169,7 +169,7 @@ def _cmd_track(args: argparse.Namespace) -> int:
 def _cmd_trackers(args: argparse.Namespace) -> int:
     import inspect
 
-    import tracker
+    from simrig import trackers as tracker
 
     for name in tracker.available():
         settings = ", ".join(

@@ -12,8 +12,8 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from scenarios import Scenario
-from scenarios.perturbation_schema import WORLD_KINDS
+from simrig.scenarios import Scenario
+from simrig.scenarios.perturbation_schema import WORLD_KINDS
 
 from .dataset import DatasetWriter, check_output_folder
 from .dataset.manifest import IMAGES_FOLDER, package_versions

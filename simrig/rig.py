@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from scenarios.schema import RigConfig
+from simrig.scenarios.schema import RigConfig
 
 from .types import Camera, Rig
 

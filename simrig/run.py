@@ -11,7 +11,7 @@ import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
-from scenarios import Scenario, load_scenario
+from simrig.scenarios import Scenario, load_scenario
 
 from .generate import generate
 from .score import ScoreReport, score

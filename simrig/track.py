@@ -11,8 +11,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import tracker as tracker_registry
-from tracker.errors import TrackerInputError
+import simrig.trackers as tracker_registry
+from simrig.trackers.errors import TrackerInputError
 
 from .dataset import Dataset
 from .errors import SimrigError

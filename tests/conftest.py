@@ -2,7 +2,7 @@
 
 import pytest
 
-from scenarios import load_scenario
+from simrig.scenarios import load_scenario
 
 
 @pytest.fixture(scope="session")

@@ -3,8 +3,8 @@ and cells counted by hand."""
 
 import pytest
 
-from scenarios import ScenarioError, load_scenario
-from scenarios.overrides import get_setting, with_setting
+from simrig.scenarios import ScenarioError, load_scenario
+from simrig.scenarios.overrides import get_setting, with_setting
 from simrig.bench.parameters import apply_parameter, parameter_value
 from simrig.bench.plan import BASE, make_plan
 from simrig.bench.suite import SuiteError, load_suite, suite_catalog
@@ -27,8 +27,8 @@ def test_named_suites_load():
 
 
 def test_standard_covers_every_catalog_scenario_and_reference_tracker():
-    from scenarios import catalog
-    from tracker import registry
+    from simrig.scenarios import catalog
+    from simrig.trackers import registry
 
     suite, _ = load_suite("standard")
     assert set(suite.scenarios) == set(catalog())

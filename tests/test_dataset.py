@@ -131,7 +131,7 @@ def test_a_generation_killed_halfway_leaves_no_complete_dataset_and_a_rerun_succ
 
 
 def test_a_road_without_traffic_reads_back_as_empty_frames(tmp_path):
-    from scenarios import load_scenario
+    from simrig.scenarios import load_scenario
 
     path = tmp_path / "empty.toml"
     path.write_text('extends = "highway_surround6"\n[traffic]\nvehicles = 0\n')

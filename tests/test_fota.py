@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tracker.fota import augmented_problem, fota, sinkhorn
+from simrig.trackers.fota import augmented_problem, fota, sinkhorn
 
 
 def _problem(seed, n=6, m=9, high=11.0):
@@ -63,7 +63,7 @@ def test_a_track_seen_by_two_cameras_receives_both_detections():
     result = fota(cost, gate=5.0)
     assert result.owner.tolist() == [0, 0, 1, -1]
     # With one-to-one Hungarian, the second view of track 0 would be left over (and start a duplicate).
-    from tracker.assignment import hungarian
+    from simrig.trackers.assignment import hungarian
     assert hungarian(cost, gate=5.0).tolist().count(0) == 1
 
 

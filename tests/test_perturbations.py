@@ -4,7 +4,7 @@ import numpy as np
 import pyarrow.compute as pc
 import pytest
 
-from scenarios import load_scenario
+from simrig.scenarios import load_scenario
 from simrig.dataset import Dataset
 from simrig.generate import generate
 

@@ -2,7 +2,7 @@
 
 import pytest
 
-from scenarios import DEFAULT_SCENARIO, ScenarioError, catalog, load_scenario
+from simrig.scenarios import DEFAULT_SCENARIO, ScenarioError, catalog, load_scenario
 
 
 def _write(tmp_path, text, name="mine.toml"):
@@ -66,7 +66,7 @@ def test_unknown_catalog_name_lists_the_catalog():
 
 
 def test_extends_cycle_is_reported(tmp_path, monkeypatch):
-    import scenarios
+    from simrig import scenarios
 
     _write(tmp_path, 'extends = "b"\n', "a.toml")
     _write(tmp_path, 'extends = "a"\n', "b.toml")

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from scenarios import load_scenario
+from simrig.scenarios import load_scenario
 from simrig.dataset import Dataset
 from simrig.generate import generate
 from simrig.score import score, write_tracks

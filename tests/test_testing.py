@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from scenarios.schema import Scenario
+from simrig.scenarios.schema import Scenario
 from simrig.testing import load_replay, run_tracker, write_replay
 from simrig.testing.runs import dataset_for
 from simrig.testing.strategies import scenarios, seeds
@@ -59,7 +59,7 @@ class Shuffled:
 @QUICK
 @given(scenarios())
 def test_tracking_does_not_depend_on_the_order_of_detections_within_a_frame(scenario):
-    import tracker
+    from simrig import trackers as tracker
     from simrig.score.tracks_file import read_tracks
     from simrig.track import run_tracker as run_on_dataset
 
@@ -86,7 +86,7 @@ def canonical(frame, track_id, boxes):
 
 
 def test_a_replay_file_round_trips(tmp_path):
-    from scenarios import load_scenario
+    from simrig.scenarios import load_scenario
 
     scenario = load_scenario("stereo_one_sided")
     path = write_replay(tmp_path / "r.toml", scenario, 3, tracker="saga", params={"gate": 4.0}, failure="boom")
@@ -98,7 +98,7 @@ def test_a_replay_file_round_trips(tmp_path):
 BROKEN = '''
 """A deliberately broken tracker: once fewer detections arrive than in the frame before (a miss, an
 occlusion), it never reports anything again."""
-import tracker
+from simrig import trackers as tracker
 
 
 class DropsAfterOcclusion:

@@ -6,8 +6,8 @@ import itertools
 import numpy as np
 import pytest
 
-from tracker.assignment import greedy, hungarian
-from tracker.costs import bev_distance, mahalanobis, overlaps
+from simrig.trackers.assignment import greedy, hungarian
+from simrig.trackers.costs import bev_distance, mahalanobis, overlaps
 
 
 def _box(x, y, z=1.0, length=2.0, width=2.0, height=2.0, yaw=0.0):

@@ -2,7 +2,7 @@
 
 import pytest
 
-import tracker
+from simrig import trackers as tracker
 
 
 class _Still:

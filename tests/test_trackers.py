@@ -4,10 +4,10 @@ floods of detections and bad numbers."""
 import numpy as np
 import pytest
 
-import tracker
+from simrig import trackers as tracker
 from simrig.types import ActorClass, Box2D, Box3D, Camera, Detection, EgoPose, Rig, SensorFrame
-from tracker.errors import TrackerInputError
-from tracker.life import QueryLife, TrackLife
+from simrig.trackers.errors import TrackerInputError
+from simrig.trackers.life import QueryLife, TrackLife
 
 NAMES = ("saga", "global_hungarian", "percam_merge", "simpletrack")
 RIG = Rig("pair", tuple(

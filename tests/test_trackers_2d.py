@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-import tracker
+from simrig import trackers as tracker
 from simrig.types import ActorClass, Box2D, Camera, Detection, EgoPose, Rig, SensorFrame
-from tracker.boxes2d import iou, occlusion_ratios
-from tracker.errors import TrackerInputError
+from simrig.trackers.boxes2d import iou, occlusion_ratios
+from simrig.trackers.errors import TrackerInputError
 
 STEREO = Rig("stereo", tuple(
     Camera(name, 1242, 375, 721.5, 721.5, 621.0, 187.5, (0.0, y, 1.65), 0.0)

@@ -12,7 +12,7 @@ from simrig.types import ActorClass, Box2D, Box3D, EgoPose, GroundTruthFrame, Tr
 def test_records_import_without_simulator_renderer_or_arrow():
     # The reference trackers need scipy (Hungarian, filterpy) and shapely, nothing of the simulator.
     code = (
-        "import sys, simrig.types, tracker\n"
+        "import sys, simrig.types, simrig.trackers\n"
         "heavy = {'highway_env', 'pyrender', 'pyarrow', 'gymnasium', 'pydantic'} & set(sys.modules)\n"
         "print(sorted(heavy))"
     )

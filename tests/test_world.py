@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from highway_env.vehicle.behavior import IDMVehicle
 
-from scenarios.schema import TrafficConfig
+from simrig.scenarios.schema import TrafficConfig
 from simrig.seeding import RandomStreams
 from simrig.world import CLASS_SPECS, TrafficWorld
 from simrig.world.vehicles import SimrigVehicle

@@ -3,7 +3,7 @@
 An alias maps the value a suite sweeps (and a plot shows) to a scenario setting:
 ``miss_probability`` m sets ``sensor.detection.probability`` to 1 − m.
 
->>> from scenarios import load_scenario
+>>> from simrig.scenarios import load_scenario
 >>> s = load_scenario("highway_surround6")
 >>> round(parameter_value(s, "miss_probability"), 6)
 0.05
@@ -16,8 +16,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from scenarios import Scenario
-from scenarios.overrides import get_setting, with_setting
+from simrig.scenarios import Scenario
+from simrig.scenarios.overrides import get_setting, with_setting
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from scenarios import Scenario
+from simrig.scenarios import Scenario
 
 from ..dataset.cache import dataset_key
 from .parameters import apply_parameter, parameter_value

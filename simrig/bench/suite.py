@@ -41,9 +41,9 @@ from typing import Annotated, Any
 
 from pydantic import Field, ValidationError, model_validator
 
-from scenarios import CATALOG_DIR, Scenario, ScenarioError, describe_errors, load_scenario
-from scenarios.base import Strict
-from scenarios.schema import RIG_PRESETS
+from simrig.scenarios import CATALOG_DIR, Scenario, ScenarioError, describe_errors, load_scenario
+from simrig.scenarios.base import Strict
+from simrig.scenarios.schema import RIG_PRESETS
 
 from ..errors import SimrigError
 from ..rig import build_rig

@@ -11,7 +11,7 @@ import hashlib
 import json
 from pathlib import Path
 
-from scenarios import Scenario
+from simrig.scenarios import Scenario
 
 from ..errors import DatasetError, DatasetExistsError
 from .reader import Dataset
@@ -23,7 +23,7 @@ KEY_LENGTH = 20
 def dataset_key(scenario: Scenario, seed: int, frames: int | None) -> str:
     """The content key of (``scenario``, ``seed``, ``frames``); ``frames`` None means the scenario's own.
 
-    >>> from scenarios import load_scenario
+    >>> from simrig.scenarios import load_scenario
     >>> s = load_scenario("highway_surround6")
     >>> dataset_key(s, 0, None) == dataset_key(s, 0, s.frames) != dataset_key(s, 1, None)
     True

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pyarrow.parquet as pq
 
-from scenarios import Scenario
+from simrig.scenarios import Scenario
 
 from ..dataset import Dataset
 from ..dataset.cache import cached_dataset

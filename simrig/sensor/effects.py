@@ -13,7 +13,7 @@ from typing import Protocol
 
 import numpy as np
 
-from scenarios.sensor_schema import (
+from simrig.scenarios.sensor_schema import (
     ClutterConfig,
     DetectionConfig,
     EmbeddingConfig,

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scenarios import Scenario
-from scenarios.perturbation_schema import WORLD_KINDS, DropFrames
+from simrig.scenarios import Scenario
+from simrig.scenarios.perturbation_schema import WORLD_KINDS, DropFrames
 
 from ..geometry import Projection, camera_from_world
 from ..render.visibility import Visibility

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios import ScenarioError
-from scenarios.perturbation_schema import Blackout, Calibration, MissBurst, Noise, Occlude
+from simrig.scenarios import ScenarioError
+from simrig.scenarios.perturbation_schema import Blackout, Calibration, MissBurst, Noise, Occlude
 
 from ..seeding import RandomStreams
 from ..types import Rig

@@ -29,8 +29,8 @@ def pytest_addoption(parser):
 @pytest.fixture
 def simrig_scenario():
     """Build a scenario from a catalog name or file, overriding any key (tables merge key by key)."""
-    from scenarios import load_scenario
-    from scenarios.schema import Scenario
+    from simrig.scenarios import load_scenario
+    from simrig.scenarios.schema import Scenario
 
     def build(base: str = "highway_surround6", **overrides) -> Scenario:
         raw = load_scenario(base).model_dump(mode="json", exclude_none=True, exclude_unset=True)
@@ -44,8 +44,8 @@ def simrig_scenario():
 @pytest.fixture(scope="session")
 def simrig_dataset():
     """A small generated dataset: ``highway_surround6``, 12 frames, 8 vehicles, seed 0."""
-    from scenarios import load_scenario
-    from scenarios.schema import Scenario
+    from simrig.scenarios import load_scenario
+    from simrig.scenarios.schema import Scenario
 
     from .runs import dataset_for
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import tomli_w
 from pydantic import ValidationError
 
-from scenarios.schema import Scenario
+from simrig.scenarios.schema import Scenario
 
 from ..errors import SimrigError
 from ..score import ScoreReport

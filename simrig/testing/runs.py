@@ -13,7 +13,7 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from scenarios.schema import Scenario
+from simrig.scenarios.schema import Scenario
 
 from ..dataset import Dataset
 from ..dataset.cache import cached_dataset, dataset_key

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from hypothesis import strategies as st
 
-from scenarios.schema import Scenario
+from simrig.scenarios.schema import Scenario
 
 RIGS = ("surround6", "stereo")
 

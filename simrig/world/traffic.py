@@ -23,8 +23,8 @@ import highway_env  # noqa: F401  (registers the environments)
 import numpy as np
 from highway_env.road.lane import LineType, StraightLane
 
-from scenarios.perturbation_schema import CutIn, Occluder
-from scenarios.schema import TrafficConfig
+from simrig.scenarios.perturbation_schema import CutIn, Occluder
+from simrig.scenarios.schema import TrafficConfig
 
 from ..render.road import RoadMarkings
 from ..types import ActorClass, EgoPose, GroundTruthFrame

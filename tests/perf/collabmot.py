@@ -23,12 +23,12 @@ import numpy as np
 from published import cached_dataset, command_line, machine, publish  # tests/perf helpers
 from scipy.optimize import linear_sum_assignment
 
-import tracker
-from scenarios import load_scenario
+from simrig import trackers as tracker
+from simrig.scenarios import load_scenario
 from simrig.rig import build_rig
-from tracker.collabmot.affinity import affinity
-from tracker.collabmot.association import associate
-from tracker.collabmot.tracklets import Tracklet
+from simrig.trackers.collabmot.affinity import affinity
+from simrig.trackers.collabmot.association import associate
+from simrig.trackers.collabmot.tracklets import Tracklet
 
 PAIRS = (("sort", "sort"), ("sort", "deepsort"), ("deepsort", "sort"), ("deepsort", "deepsort"))
 

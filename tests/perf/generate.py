@@ -26,8 +26,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from scenarios import load_scenario
-from scenarios.sensor_schema import RenderConfig
+from simrig.scenarios import load_scenario
+from simrig.scenarios.sensor_schema import RenderConfig
 from simrig.generate import generate
 from simrig.seeding import RandomStreams
 from simrig.world import TrafficWorld

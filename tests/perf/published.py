@@ -7,7 +7,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from scenarios import load_scenario
+from simrig.scenarios import load_scenario
 from simrig.dataset import Dataset
 from simrig.errors import DatasetError
 from simrig.generate import generate

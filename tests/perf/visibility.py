@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios import load_scenario
-from scenarios.sensor_schema import RenderConfig
+from simrig.scenarios import load_scenario
+from simrig.scenarios.sensor_schema import RenderConfig
 from simrig.generate import generate
 from simrig.geometry import project_boxes
 from simrig.render.meter import VisibilityMeter
