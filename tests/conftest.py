@@ -1,7 +1,6 @@
 """Shared fixtures: a small scenario that generates in about a second."""
 
 import pytest
-
 from simrig.scenarios import load_scenario
 
 

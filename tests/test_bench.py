@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
-
 from simrig.scenarios import load_scenario
+
 from simrig.bench import BenchError, run_bench
 from simrig.bench.parameters import apply_parameter
 from simrig.dataset.cache import dataset_key

@@ -2,9 +2,9 @@
 and cells counted by hand."""
 
 import pytest
-
 from simrig.scenarios import ScenarioError, load_scenario
 from simrig.scenarios.overrides import get_setting, with_setting
+
 from simrig.bench.parameters import apply_parameter, parameter_value
 from simrig.bench.plan import BASE, make_plan
 from simrig.bench.suite import SuiteError, load_suite, suite_catalog

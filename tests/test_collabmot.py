@@ -2,14 +2,14 @@
 
 import numpy as np
 import pytest
-from test_trackers_2d import STEREO, detection, frame
-
-from simrig import trackers as tracker
 from simrig.trackers.collabmot.affinity import affinity, box_side, position_cost, remote_side
 from simrig.trackers.collabmot.association import associate, combine_ids, verify
 from simrig.trackers.collabmot.interpolation import fill_gap
 from simrig.trackers.collabmot.resurfacing import resurface
 from simrig.trackers.collabmot.tracklets import NO_ID, Tracklet
+from test_trackers_2d import STEREO, detection, frame
+
+from simrig import trackers as tracker
 
 
 def tracklet(camera, local_id, frames, *, global_id=NO_ID, min_cost=np.inf, feature=None, x=100.0, vx=0.0):

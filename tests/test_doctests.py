@@ -12,7 +12,6 @@ import importlib
 import pkgutil
 
 import pytest
-
 import simrig.scenarios
 import simrig.trackers
 

@@ -6,7 +6,6 @@ import ot
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from simrig.trackers.fota import augmented_problem, fota, sinkhorn
 
 

@@ -4,8 +4,8 @@ import math
 
 import numpy as np
 import pytest
-
 from simrig.scenarios.schema import RigConfig
+
 from simrig.geometry import box_corners, clip_convex_polygons, project_boxes
 from simrig.rig import build_rig
 from simrig.types import EgoPose

@@ -3,8 +3,8 @@
 import numpy as np
 import pyarrow.compute as pc
 import pytest
-
 from simrig.scenarios import load_scenario
+
 from simrig.dataset import Dataset
 from simrig.generate import generate
 

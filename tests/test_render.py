@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
-
 from simrig.scenarios.schema import RigConfig
+
 from simrig.classes import CLASS_SPECS
 from simrig.geometry import box_corners, camera_from_world, project_boxes, transform_points
 from simrig.render.meter import VisibilityMeter

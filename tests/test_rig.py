@@ -4,8 +4,8 @@ import math
 
 import numpy as np
 import pytest
-
 from simrig.scenarios.schema import RigConfig
+
 from simrig.rig import build_rig, rig_from_dict, rig_to_dict
 
 

@@ -1,7 +1,6 @@
 """Scenario validation: every bad input is one clear line naming the key and the file."""
 
 import pytest
-
 from simrig.scenarios import DEFAULT_SCENARIO, ScenarioError, catalog, load_scenario
 
 

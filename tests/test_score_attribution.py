@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
-
 from simrig.scenarios import load_scenario
+
 from simrig.dataset import Dataset
 from simrig.generate import generate
 from simrig.score import score, write_tracks

@@ -1,12 +1,12 @@
 """Scoring one camera (``simrig score --camera``) and semi-online trackers (``finish``) through ``run_tracker``."""
 
 import pytest
+from simrig.trackers import register
 
 from simrig.cli import main
 from simrig.errors import TracksError
 from simrig.score import score
 from simrig.track import run_tracker
-from simrig.trackers import register
 
 
 def test_one_camera_scores_as_that_camera_does_in_the_full_report(small_dataset, tmp_path):

@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
-
 from simrig.scenarios import ScenarioError
 from simrig.scenarios.schema import RigConfig, Scenario
 from simrig.scenarios.sensor_schema import Box3DNoiseConfig, DetectionConfig
+
 from simrig.classes import CLASS_SPECS
 from simrig.geometry import camera_from_world, project_boxes
 from simrig.render.visibility import Visibility

@@ -10,8 +10,8 @@ import textwrap
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
-
 from simrig.scenarios.schema import Scenario
+
 from simrig.testing import load_replay, run_tracker, write_replay
 from simrig.testing.runs import dataset_for
 from simrig.testing.strategies import scenarios, seeds

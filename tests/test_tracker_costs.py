@@ -5,7 +5,6 @@ import itertools
 
 import numpy as np
 import pytest
-
 from simrig.trackers.assignment import greedy, hungarian
 from simrig.trackers.costs import bev_distance, mahalanobis, overlaps
 

@@ -3,11 +3,11 @@ floods of detections and bad numbers."""
 
 import numpy as np
 import pytest
+from simrig.trackers.errors import TrackerInputError
+from simrig.trackers.life import QueryLife, TrackLife
 
 from simrig import trackers as tracker
 from simrig.types import ActorClass, Box2D, Box3D, Camera, Detection, EgoPose, Rig, SensorFrame
-from simrig.trackers.errors import TrackerInputError
-from simrig.trackers.life import QueryLife, TrackLife
 
 NAMES = ("saga", "global_hungarian", "percam_merge", "simpletrack")
 RIG = Rig("pair", tuple(

@@ -2,11 +2,11 @@
 
 import numpy as np
 import pytest
+from simrig.trackers.boxes2d import iou, occlusion_ratios
+from simrig.trackers.errors import TrackerInputError
 
 from simrig import trackers as tracker
 from simrig.types import ActorClass, Box2D, Camera, Detection, EgoPose, Rig, SensorFrame
-from simrig.trackers.boxes2d import iou, occlusion_ratios
-from simrig.trackers.errors import TrackerInputError
 
 STEREO = Rig("stereo", tuple(
     Camera(name, 1242, 375, 721.5, 721.5, 621.0, 187.5, (0.0, y, 1.65), 0.0)

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 from highway_env.vehicle.behavior import IDMVehicle
-
 from simrig.scenarios.schema import TrafficConfig
+
 from simrig.seeding import RandomStreams
 from simrig.world import CLASS_SPECS, TrafficWorld
 from simrig.world.vehicles import SimrigVehicle

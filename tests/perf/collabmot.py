@@ -22,13 +22,13 @@ from pathlib import Path
 import numpy as np
 from published import cached_dataset, command_line, machine, publish  # tests/perf helpers
 from scipy.optimize import linear_sum_assignment
-
-from simrig import trackers as tracker
 from simrig.scenarios import load_scenario
-from simrig.rig import build_rig
 from simrig.trackers.collabmot.affinity import affinity
 from simrig.trackers.collabmot.association import associate
 from simrig.trackers.collabmot.tracklets import Tracklet
+
+from simrig import trackers as tracker
+from simrig.rig import build_rig
 
 PAIRS = (("sort", "sort"), ("sort", "deepsort"), ("deepsort", "sort"), ("deepsort", "deepsort"))
 

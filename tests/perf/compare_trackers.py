@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 from published import cached_dataset, command_line, machine, publish  # tests/perf helpers
-
 from simrig.scenarios import load_scenario
+
 from simrig.score import score
 from simrig.track import run_tracker
 

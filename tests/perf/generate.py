@@ -28,6 +28,7 @@ from pathlib import Path
 
 from simrig.scenarios import load_scenario
 from simrig.scenarios.sensor_schema import RenderConfig
+
 from simrig.generate import generate
 from simrig.seeding import RandomStreams
 from simrig.world import TrafficWorld

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from simrig.scenarios import load_scenario
+
 from simrig.dataset import Dataset
 from simrig.errors import DatasetError
 from simrig.generate import generate

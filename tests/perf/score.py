@@ -39,8 +39,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from peer_scorers import motmetrics_module  # noqa: E402  (tests/ helpers)
-
 from simrig.scenarios import load_scenario  # noqa: E402
+
 from simrig.dataset import Dataset  # noqa: E402
 from simrig.generate import generate  # noqa: E402
 from simrig.score.amota import amota_family  # noqa: E402

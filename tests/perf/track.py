@@ -29,12 +29,12 @@ import numpy as np
 import ot
 from published import cached_dataset, command_line, machine, publish  # tests/perf helpers
 from scipy.optimize import linear_sum_assignment
-
-from simrig import trackers as tracker
 from simrig.trackers.assignment import hungarian
 from simrig.trackers.cost_models import MahalanobisCost
 from simrig.trackers.fota import augmented_problem, fota
 from simrig.trackers.motion import KalmanConfig, innovation_covariances, new_filter, predict, update
+
+from simrig import trackers as tracker
 
 RIG_TRACKERS = ("saga", "global_hungarian", "percam_merge", "simpletrack", "sort", "deepsort")
 """The trackers that run on any rig (``collabmot`` needs a stereo pair: ``tests/perf/collabmot.py``)."""

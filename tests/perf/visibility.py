@@ -25,9 +25,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from simrig.scenarios import load_scenario
 from simrig.scenarios.sensor_schema import RenderConfig
+
 from simrig.generate import generate
 from simrig.geometry import project_boxes
 from simrig.render.meter import VisibilityMeter
