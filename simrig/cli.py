@@ -38,8 +38,9 @@ class _OneLineParser(argparse.ArgumentParser):
 
 
 def _cmd_generate(args: argparse.Namespace) -> int:
+    from simrig.pipeline.generate import generate
+
     from .dataset import Dataset
-    from .generate import generate
 
     scenario = load_scenario(args.scenario)
     result = generate(
@@ -89,7 +90,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
-    from .mosaic import render_mosaic
+    from simrig.figures.mosaic import render_mosaic
 
     out = args.out or Path(args.dataset) / f"mosaic_{args.frame:06d}.png"
     print(render_mosaic(args.dataset, args.frame, out))
@@ -155,7 +156,7 @@ def _params(pairs: list[tuple[str, object]] | None) -> dict[str, object]:
 
 
 def _cmd_track(args: argparse.Namespace) -> int:
-    from .track import run_tracker
+    from simrig.pipeline.track import run_tracker
 
     result = run_tracker(args.dataset, args.tracker, args.out, _params(args.param))
     print(
@@ -181,7 +182,7 @@ def _cmd_trackers(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .run import run_pipeline
+    from simrig.pipeline.run import run_pipeline
 
     result = run_pipeline(
         args.scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=args.out,

@@ -19,7 +19,7 @@ def small_scenario(tmp_path_factory):
 def small_dataset(tmp_path_factory, small_scenario):
     """A generated 30-frame dataset of ``small_scenario`` (seed 0)."""
     from simrig.dataset import Dataset
-    from simrig.generate import generate
+    from simrig.pipeline.generate import generate
 
     out = tmp_path_factory.mktemp("datasets") / "small-seed0"
     generate(small_scenario, seed=0, out=out, progress=False)

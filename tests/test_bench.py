@@ -17,11 +17,11 @@ from simrig.scenarios import load_scenario
 
 from simrig.bench import BenchError, run_bench
 from simrig.bench.parameters import apply_parameter
-from simrig.dataset.cache import dataset_key
-from simrig.generate import generate
+from simrig.pipeline.cache import dataset_key
+from simrig.pipeline.generate import generate
+from simrig.pipeline.track import run_tracker
 from simrig.report import ReportError, write_report
 from simrig.score import score
-from simrig.track import run_tracker
 
 TESTS = Path(__file__).parent
 

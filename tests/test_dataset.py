@@ -12,8 +12,8 @@ import pytest
 
 from simrig.dataset import Dataset, DatasetWriter
 from simrig.errors import DatasetError, DatasetExistsError
-from simrig.generate import generate
 from simrig.geometry import project_boxes
+from simrig.pipeline.generate import generate
 
 
 def _hashes(path):

@@ -6,7 +6,7 @@ import pytest
 from simrig.scenarios import load_scenario
 
 from simrig.dataset import Dataset
-from simrig.generate import generate
+from simrig.pipeline.generate import generate
 
 P_MAX = 0.95
 

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from peer_scorers import flatten, motmetrics_module, random_scene, trackeval_data, trackeval_metrics
 
+from simrig.dataset.tracks_file import TrackRows
 from simrig.score.clear import CLEAR
 from simrig.score.counts import sum_counts
 from simrig.score.ground_truth import load_ground_truth
@@ -12,7 +13,6 @@ from simrig.score.identity import Identity
 from simrig.score.inputs import camera_sequences
 from simrig.score.ratios import clear_ratios, hota_ratios, identity_ratios
 from simrig.score.sequence import sequence_from_rows
-from simrig.score.tracks_file import TrackRows
 
 COMPARED = ("HOTA", "DetA", "AssA", "LocA", "DetRe", "DetPr", "AssRe", "AssPr", "MOTA", "MOTP", "IDSW", "Frag",
             "MT", "PT", "ML", "CLR_TP", "CLR_FN", "CLR_FP", "IDF1", "IDP", "IDR")

@@ -6,13 +6,13 @@ from simrig.scenarios import ScenarioError
 from simrig.scenarios.schema import RigConfig, Scenario
 from simrig.scenarios.sensor_schema import Box3DNoiseConfig, DetectionConfig
 
+from simrig.causes import Cause
 from simrig.classes import CLASS_SPECS
 from simrig.geometry import camera_from_world, project_boxes
 from simrig.render.visibility import Visibility
 from simrig.rig import build_rig
 from simrig.seeding import RandomStreams
 from simrig.sensor.batch import CameraBatch, FrameContext
-from simrig.sensor.causes import Cause
 from simrig.sensor.effects import DetectionDraw, DetectionProbability, Monocular3D
 from simrig.sensor.model import SensorModel
 from simrig.types import ActorClass, EgoPose, GroundTruthFrame

@@ -60,8 +60,8 @@ class Shuffled:
 @given(scenarios())
 def test_tracking_does_not_depend_on_the_order_of_detections_within_a_frame(scenario):
     from simrig import trackers as tracker
-    from simrig.score.tracks_file import read_tracks
-    from simrig.track import run_tracker as run_on_dataset
+    from simrig.dataset.tracks_file import read_tracks
+    from simrig.pipeline.track import run_tracker as run_on_dataset
 
     dataset = dataset_for(scenario)
     for name in ("saga", "sort"):

@@ -1,7 +1,7 @@
 """A suite expanded into points (rows of the results table) and cells (what is generated and tracked).
 
 A **point** is (scenario, sweep, value, seed): the base settings or one swept value. A **cell** is the
-dataset a point needs, keyed by content (:func:`~simrig.dataset.cache.dataset_key`): two points with the same
+dataset a point needs, keyed by content (:func:`~simrig.pipeline.cache.dataset_key`): two points with the same
 resolved scenario — a sweep value equal to the scenario's own setting, say — share one cell, which is
 generated and tracked once and reported under both.
 """
@@ -13,9 +13,9 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from simrig.pipeline.cache import dataset_key
 from simrig.scenarios import Scenario
 
-from ..dataset.cache import dataset_key
 from .parameters import apply_parameter, parameter_value
 from .suite import Suite, TrackerEntry, tracker_runs_on
 

@@ -41,13 +41,13 @@ from typing import Annotated, Any
 
 from pydantic import Field, ValidationError, model_validator
 
+from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.scenarios import CATALOG_DIR, Scenario, ScenarioError, describe_errors, load_scenario
 from simrig.scenarios.base import Strict
 from simrig.scenarios.schema import RIG_PRESETS
 
 from ..errors import SimrigError
 from ..rig import build_rig
-from ..track import TrackingError, build_tracker
 from .parameters import ALIASES, apply_parameter, parameter_value
 
 SUITES_DIR = CATALOG_DIR / "suites"

@@ -21,9 +21,9 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
+from ..causes import CAUSE_BITS, CAUSE_NAMES, Cause
 from ..geometry import Projection
 from ..render.visibility import Visibility
-from ..sensor.causes import Cause, cause_lists
 from ..sensor.model import SensorOutput
 from ..types import BOX2D_FIELDS, BOX3D_FIELDS, GroundTruthFrame
 
@@ -191,3 +191,16 @@ def sensor_columns(frame: int, timestamp: float, sensor: SensorOutput) -> dict[s
         "events": pa.array([list(sensor.events)], type=pa.list_(pa.string())),
     }
     return {"detections": detection_columns, "sensor_truth": truth_columns, "frames": frame_row}
+
+
+def cause_lists(masks: np.ndarray) -> pa.ListArray:
+    """A list<string> column from ``(R,)`` int64 bit masks, names in :data:`CAUSE_NAMES` order.
+
+    >>> cause_lists(np.array([0, int(Cause.FAR | Cause.OCCLUDED)])).to_pylist()
+    [[], ['occluded', 'far']]
+    """
+    bits = (np.asarray(masks, dtype=np.int64)[:, None] & CAUSE_BITS[None, :]) != 0
+    rows, which = np.nonzero(bits)
+    offsets = np.concatenate([[0], np.cumsum(bits.sum(axis=1))]).astype(np.int32)
+    names = pa.array(np.array(CAUSE_NAMES, dtype=object)[which].tolist(), type=pa.string())
+    return pa.ListArray.from_arrays(pa.array(offsets), names)

@@ -6,11 +6,12 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
+from simrig.dataset.tracks_file import TrackRows, TrackSet, read_tracks
+
 from ..dataset import Dataset
 from ..errors import SimrigError
 from ..score.ground_truth import GroundTruth, load_ground_truth
 from ..score.inputs import project_tracks
-from ..score.tracks_file import TrackRows, TrackSet, read_tracks
 
 
 class ExportError(SimrigError):

@@ -26,8 +26,9 @@ import pyrender  # noqa: E402
 import trimesh  # noqa: E402
 
 from ..geometry import camera_from_world  # noqa: E402
+from ..road import RoadMarkings  # noqa: E402
 from ..types import ActorClass, Camera, EgoPose, Rig  # noqa: E402
-from .road import GROUND_HALF_SIZE_M, RoadMarkings, painted_quads  # noqa: E402
+from .road import GROUND_HALF_SIZE_M, painted_quads  # noqa: E402
 from .shapes import unit_parts  # noqa: E402
 
 OPENCV_TO_OPENGL = np.diag([1.0, -1.0, -1.0, 1.0])

@@ -15,16 +15,16 @@ from pathlib import Path
 
 import pyarrow.parquet as pq
 
+from simrig.dataset.tracks_file import TRACKS3D_FILE
+from simrig.figures.birds_eye import plot_bev
+from simrig.figures.mosaic import render_mosaic
+from simrig.pipeline.cache import cached_dataset
+from simrig.pipeline.track import run_tracker
 from simrig.scenarios import Scenario
 
 from ..dataset import Dataset
-from ..dataset.cache import cached_dataset
 from ..errors import DatasetError
-from ..mosaic import render_mosaic
 from ..score import score
-from ..score.tracks_file import TRACKS3D_FILE
-from ..track import run_tracker
-from .bev_plot import plot_bev
 from .groups import group_of
 from .load import BenchResults, ReportError
 

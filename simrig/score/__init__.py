@@ -5,8 +5,9 @@ distance): the nuScenes AMOTA family and MUTR3D's velocity errors. Every FN, IDS
 causes the dataset recorded.
 """
 
+from simrig.dataset.tracks_file import TrackSet, read_tracks, write_tracks
+from simrig.score.results import ScoreReport
+
 from .api import score
-from .report import ScoreReport
-from .tracks_file import TrackSet, read_tracks, write_tracks
 
 __all__ = ["ScoreReport", "TrackSet", "read_tracks", "score", "write_tracks"]

@@ -7,6 +7,9 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
+from simrig.dataset.tracks_file import TrackSet, read_tracks
+from simrig.score.results import COUNT_METRICS, METRICS_2D, METRICS_3D, ScoreReport
+
 from ..dataset import Dataset
 from ..errors import TracksError
 from .amota import amota_family
@@ -20,8 +23,6 @@ from .hota import HOTA
 from .identity import Identity
 from .inputs import camera_sequences, class_sequences, project_tracks
 from .ratios import clear_ratios, hota_ratios, identity_ratios
-from .report import COUNT_METRICS, METRICS_2D, METRICS_3D, ScoreReport
-from .tracks_file import TrackSet, read_tracks
 
 LOOKBACK_S = 1.0
 """[s] an identity switch is also tagged with the causes of this long before it (see attribution)."""

@@ -1,6 +1,6 @@
 """Why each error happened: every FN, IDS and FRAG tagged with the causes the dataset recorded.
 
-Causes are the sensor's (:class:`~simrig.sensor.causes.Cause` names: ``occluded``, ``truncated``, ``far``,
+Causes are the sensor's (:class:`~simrig.causes.Cause` names: ``occluded``, ``truncated``, ``far``,
 ``scheduled_occlusion``, ``scheduled_miss``, ``blackout``, ``dropped_frame``, ``out_of_view``, …) plus
 ``handover`` (the set of cameras that see the actor changed) and ``none`` (nothing recorded: the detector
 delivered the actor, or missed it at random, and the tracker lost it).
@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import pyarrow as pa
 
-from ..sensor.causes import CAUSE_NAMES, Cause
+from ..causes import CAUSE_NAMES, Cause
 from .clear import ClearEvents
 from .ground_truth import GroundTruth
 

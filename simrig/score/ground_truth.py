@@ -2,7 +2,7 @@
 and visibility per camera, and the causes the sensor recorded for each (frame, actor, camera).
 
 Row ``r`` is one (frame, actor) of the ``ground_truth`` table, in its order (sorted by frame). Per-camera
-arrays are ``(R, C)`` in rig order. Cause masks are :class:`~simrig.sensor.causes.Cause` bit flags.
+arrays are ``(R, C)`` in rig order. Cause masks are :class:`~simrig.causes.Cause` bit flags.
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ from functools import cached_property
 
 import numpy as np
 
+from ..causes import Cause, cause_masks
 from ..dataset import Dataset
 from ..errors import DatasetError
-from ..sensor.causes import Cause, cause_masks
 from ..types import BOX2D_FIELDS, BOX3D_FIELDS, EgoPose, Rig
 
 

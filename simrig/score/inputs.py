@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from simrig.dataset.tracks_file import TrackRows
+
 from ..geometry import project_boxes
 from ..types import ActorClass
 from .bev import BevSequence, bev_sequence
 from .ground_truth import GroundTruth
 from .sequence import Sequence, sequence_from_rows
-from .tracks_file import TrackRows
 
 CLASS_RANGE_M = {ActorClass.CAR: 50.0, ActorClass.TRUCK: 50.0, ActorClass.BUS: 50.0, ActorClass.MOTORCYCLE: 40.0}
 """[m] nuScenes' evaluation range per class (car, truck, bus 50 m; motorcycle 40 m), BEV distance from the ego."""

@@ -19,11 +19,11 @@ from simrig.scenarios.sensor_schema import (
     EmbeddingConfig,
 )
 
+from ..causes import Cause
 from ..classes import CLASS_SPECS
 from ..seeding import RandomStreams
 from ..types import ActorClass
 from .batch import CameraBatch
-from .causes import Cause
 
 
 class SensorEffect(Protocol):

@@ -8,10 +8,10 @@ import numpy as np
 from simrig.scenarios import ScenarioError
 from simrig.scenarios.perturbation_schema import Blackout, Calibration, MissBurst, Noise, Occlude
 
+from ..causes import Cause
 from ..seeding import RandomStreams
 from ..types import Rig
 from .batch import CameraBatch, FrameContext
-from .causes import Cause
 
 
 class Scheduled:

@@ -118,9 +118,10 @@ def replay(path: Path | str, *, tracker: str | None = None, params: dict | None 
     tracker (or ``tracker``) with its parameters (or ``params``) and compare the headline metrics."""
     import tempfile
 
-    from ..generate import generate
+    from simrig.pipeline.generate import generate
+    from simrig.pipeline.track import run_tracker
+
     from ..score import score
-    from ..track import run_tracker
 
     loaded = load_replay(path)
     name = tracker or loaded.tracker

@@ -13,12 +13,12 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from simrig.pipeline.cache import cached_dataset, dataset_key
+from simrig.pipeline.track import run_tracker as run_on_dataset
 from simrig.scenarios.schema import Scenario
 
 from ..dataset import Dataset
-from ..dataset.cache import cached_dataset, dataset_key
 from ..score import ScoreReport, score
-from ..track import run_tracker as run_on_dataset
 
 Scores = ScoreReport
 """What :func:`run_tracker` returns: the full score report (``.metrics3d``, ``.metrics2d``, ``.errors``)."""

@@ -26,7 +26,7 @@ from highway_env.road.lane import LineType, StraightLane
 from simrig.scenarios.perturbation_schema import CutIn, Occluder
 from simrig.scenarios.schema import TrafficConfig
 
-from ..render.road import RoadMarkings
+from ..road import RoadMarkings
 from ..types import ActorClass, EgoPose, GroundTruthFrame
 from .vehicles import VEHICLE_TYPES, SimrigVehicle
 

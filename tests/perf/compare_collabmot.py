@@ -23,8 +23,8 @@ import numpy as np
 from published import cached_dataset, command_line, machine, publish  # tests/perf helpers
 from simrig.scenarios import load_scenario
 
+from simrig.pipeline.track import run_tracker
 from simrig.score import score
-from simrig.track import run_tracker
 
 SCENARIOS = ("stereo_occluder", "stereo_occluder_narrow", "stereo_one_sided", "stereo_one_sided_narrow")
 SINGLE = ("sort", "deepsort")

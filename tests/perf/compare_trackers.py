@@ -21,8 +21,8 @@ import numpy as np
 from published import cached_dataset, command_line, machine, publish  # tests/perf helpers
 from simrig.scenarios import load_scenario
 
+from simrig.pipeline.track import run_tracker
 from simrig.score import score
-from simrig.track import run_tracker
 
 TRACKERS = ("saga", "global_hungarian", "percam_merge", "simpletrack",
             "saga:duplicate_iou=0", "global_hungarian:duplicate_iou=0.3")

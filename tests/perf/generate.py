@@ -7,7 +7,7 @@ Run explicitly (not part of the test suite)::
 Both sides start from the same populated highway (``highway_surround6``: 40 vehicles, seed 0):
 
 * bare — ``env.step(None)`` on that traffic, nothing else (no window upkeep, projection or writing);
-* generate — the whole of :func:`simrig.generate.generate` with visibility rendering off (traffic with window
+* generate — the whole of :func:`simrig.pipeline.generate.generate` with visibility rendering off (traffic with window
   upkeep, projection into six cameras, the sensor model, Parquet writing, hashing, manifest). The cost of
   rendering is measured by ``tests/perf/visibility.py``.
 
@@ -29,7 +29,7 @@ from pathlib import Path
 from simrig.scenarios import load_scenario
 from simrig.scenarios.sensor_schema import RenderConfig
 
-from simrig.generate import generate
+from simrig.pipeline.generate import generate
 from simrig.seeding import RandomStreams
 from simrig.world import TrafficWorld
 

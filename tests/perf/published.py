@@ -11,7 +11,7 @@ from simrig.scenarios import load_scenario
 
 from simrig.dataset import Dataset
 from simrig.errors import DatasetError
-from simrig.generate import generate
+from simrig.pipeline.generate import generate
 
 
 def cached_dataset(scenario: str, seed: int, frames: int, data: Path) -> Dataset:

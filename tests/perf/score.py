@@ -42,7 +42,8 @@ from peer_scorers import motmetrics_module  # noqa: E402  (tests/ helpers)
 from simrig.scenarios import load_scenario  # noqa: E402
 
 from simrig.dataset import Dataset  # noqa: E402
-from simrig.generate import generate  # noqa: E402
+from simrig.dataset.tracks_file import TrackRows  # noqa: E402
+from simrig.pipeline.generate import generate  # noqa: E402
 from simrig.score.amota import amota_family  # noqa: E402
 from simrig.score.bev import bev_sequence  # noqa: E402
 from simrig.score.clear import CLEAR  # noqa: E402
@@ -53,7 +54,6 @@ from simrig.score.identity import Identity  # noqa: E402
 from simrig.score.inputs import camera_sequences  # noqa: E402
 from simrig.score.ratios import clear_ratios, hota_ratios, identity_ratios  # noqa: E402
 from simrig.score.sequence import frame_slices  # noqa: E402
-from simrig.score.tracks_file import TrackRows  # noqa: E402
 
 REPORT = Path(__file__).resolve().parents[2] / "reports" / "perf" / "score.md"
 COMPARED_2D = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDSW", "Frag", "IDF1")

@@ -28,8 +28,8 @@ import numpy as np
 from simrig.scenarios import load_scenario
 from simrig.scenarios.sensor_schema import RenderConfig
 
-from simrig.generate import generate
 from simrig.geometry import project_boxes
+from simrig.pipeline.generate import generate
 from simrig.render.meter import VisibilityMeter
 from simrig.render.scene import RigScene
 from simrig.render.shapes import part_boxes

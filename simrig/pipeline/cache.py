@@ -11,10 +11,9 @@ import hashlib
 import json
 from pathlib import Path
 
+from simrig.dataset.reader import Dataset
+from simrig.errors import DatasetError, DatasetExistsError
 from simrig.scenarios import Scenario
-
-from ..errors import DatasetError, DatasetExistsError
-from .reader import Dataset
 
 KEY_LENGTH = 20
 """[hex digits] of the SHA-256 kept in a key (80 bits)."""
@@ -28,7 +27,7 @@ def dataset_key(scenario: Scenario, seed: int, frames: int | None) -> str:
     >>> dataset_key(s, 0, None) == dataset_key(s, 0, s.frames) != dataset_key(s, 1, None)
     True
     """
-    from .. import __version__
+    from simrig import __version__
 
     identity = {
         "scenario": scenario.model_dump(mode="json"),
@@ -42,7 +41,7 @@ def dataset_key(scenario: Scenario, seed: int, frames: int | None) -> str:
 
 def cached_dataset(scenario: Scenario, seed: int, frames: int | None, root: Path | str) -> Dataset:
     """The dataset of (``scenario``, ``seed``, ``frames``) in ``root/KEY``, generated there if absent."""
-    from ..generate import generate
+    from simrig.pipeline.generate import generate
 
     out = Path(root) / dataset_key(scenario, seed, frames)
     try:

@@ -12,12 +12,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import simrig.trackers as tracker_registry
+from simrig.dataset import Dataset
+from simrig.dataset.tracks_file import write_tracks
+from simrig.errors import SimrigError
 from simrig.trackers.errors import TrackerInputError
-
-from .dataset import Dataset
-from .errors import SimrigError
-from .score.tracks_file import write_tracks
-from .types import Track
+from simrig.types import Track
 
 
 class TrackingError(SimrigError):

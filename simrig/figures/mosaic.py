@@ -21,11 +21,11 @@ import pyarrow.compute as pc  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.patches import Polygon, Rectangle  # noqa: E402
 
-from .dataset import Dataset  # noqa: E402
-from .errors import DatasetError  # noqa: E402
-from .geometry import box_corners  # noqa: E402
-from .render.road import RoadMarkings, dash_segments  # noqa: E402
-from .types import GroundTruthFrame  # noqa: E402
+from simrig.dataset import Dataset  # noqa: E402
+from simrig.errors import DatasetError  # noqa: E402
+from simrig.geometry import box_corners  # noqa: E402
+from simrig.road import RoadMarkings, dash_segments  # noqa: E402
+from simrig.types import GroundTruthFrame  # noqa: E402
 
 SURROUND_LAYOUT = (("CAM_FRONT_LEFT", "CAM_FRONT", "CAM_FRONT_RIGHT"), ("CAM_BACK_LEFT", "CAM_BACK", "CAM_BACK_RIGHT"))
 """nuScenes' usual arrangement of the six surround images."""
@@ -53,7 +53,7 @@ def _camera_images(dataset: Dataset, state: GroundTruthFrame) -> dict[str, np.nd
 
         names = dataset.rig.camera_names
         return {name: np.asarray(Image.open(images / name / f"{state.frame:06d}.png")) for name in names}
-    from .render.scene import RigScene
+    from simrig.render.scene import RigScene
 
     scene = RigScene(road_markings(dataset))
     scene.set_frame(state.ego, state.classes, state.boxes)

@@ -9,7 +9,6 @@ from __future__ import annotations
 import enum
 
 import numpy as np
-import pyarrow as pa
 
 
 class Cause(enum.IntFlag):
@@ -41,23 +40,11 @@ class Cause(enum.IntFlag):
 
 CAUSE_NAMES: tuple[str, ...] = tuple(cause.name.lower() for cause in Cause)
 """Stored names in bit order: ``out_of_view``, ``truncated``, ``occluded``, ..."""
-_BITS = np.array([int(cause) for cause in Cause], dtype=np.int64)
-
-
-def cause_lists(masks: np.ndarray) -> pa.ListArray:
-    """A list<string> column from ``(R,)`` int64 bit masks, names in :data:`CAUSE_NAMES` order.
-
-    >>> cause_lists(np.array([0, int(Cause.FAR | Cause.OCCLUDED)])).to_pylist()
-    [[], ['occluded', 'far']]
-    """
-    bits = (np.asarray(masks, dtype=np.int64)[:, None] & _BITS[None, :]) != 0
-    rows, which = np.nonzero(bits)
-    offsets = np.concatenate([[0], np.cumsum(bits.sum(axis=1))]).astype(np.int32)
-    names = pa.array(np.array(CAUSE_NAMES, dtype=object)[which].tolist(), type=pa.string())
-    return pa.ListArray.from_arrays(pa.array(offsets), names)
+CAUSE_BITS = np.array([int(cause) for cause in Cause], dtype=np.int64)
+"""The bit of each name in :data:`CAUSE_NAMES`, in the same order."""
 
 
 def cause_masks(names: list[list[str]]) -> np.ndarray:
-    """Inverse of :func:`cause_lists`: ``(R,)`` bit masks from lists of cause names."""
-    lookup = {name: int(bit) for name, bit in zip(CAUSE_NAMES, _BITS, strict=True)}
+    """Inverse of :func:`simrig.dataset.tables.cause_lists`: ``(R,)`` bit masks from lists of cause names."""
+    lookup = {name: int(bit) for name, bit in zip(CAUSE_NAMES, CAUSE_BITS, strict=True)}
     return np.array([sum(lookup[name] for name in row) for row in names], dtype=np.int64)

@@ -13,9 +13,9 @@ import numpy as np  # noqa: E402
 import pyarrow as pa  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
-from ..dataset import Dataset  # noqa: E402
-from ..mosaic import identity_colour, road_markings  # noqa: E402
-from ..render.road import dash_segments  # noqa: E402
+from simrig.dataset import Dataset  # noqa: E402
+from simrig.figures.mosaic import identity_colour, road_markings  # noqa: E402
+from simrig.road import dash_segments  # noqa: E402
 
 MARGIN_M = 10.0
 """[m] around the ground-truth and ego trajectories."""

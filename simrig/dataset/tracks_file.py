@@ -28,8 +28,8 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
-from ..errors import TracksError
-from ..types import BOX2D_FIELDS, BOX3D_FIELDS, ActorClass, Track
+from simrig.errors import TracksError
+from simrig.types import BOX2D_FIELDS, BOX3D_FIELDS, ActorClass, Track
 
 TRACKS3D_FILE = "tracks3d.parquet"
 TRACKS2D_FILE = "tracks2d.parquet"

@@ -11,11 +11,10 @@ import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
+from simrig.pipeline.generate import generate
+from simrig.pipeline.track import TrackingRun, build_tracker, run_tracker
 from simrig.scenarios import Scenario, load_scenario
-
-from .generate import generate
-from .score import ScoreReport, score
-from .track import TrackingRun, build_tracker, run_tracker
+from simrig.score import ScoreReport, score
 
 
 @dataclass(frozen=True)

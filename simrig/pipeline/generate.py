@@ -12,18 +12,17 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from simrig.dataset import DatasetWriter, check_output_folder
+from simrig.dataset.manifest import IMAGES_FOLDER, package_versions
+from simrig.dataset.tables import frame_columns
+from simrig.geometry import project_boxes
+from simrig.render.visibility import Visibility
+from simrig.rig import build_rig, rig_to_dict
 from simrig.scenarios import Scenario
 from simrig.scenarios.perturbation_schema import WORLD_KINDS
-
-from .dataset import DatasetWriter, check_output_folder
-from .dataset.manifest import IMAGES_FOLDER, package_versions
-from .dataset.tables import frame_columns
-from .geometry import project_boxes
-from .render.visibility import Visibility
-from .rig import build_rig, rig_to_dict
-from .seeding import RandomStreams
-from .sensor.model import SensorModel
-from .world import TrafficWorld
+from simrig.seeding import RandomStreams
+from simrig.sensor.model import SensorModel
+from simrig.world import TrafficWorld
 
 
 @dataclass
@@ -95,8 +94,8 @@ def generate(
                     markings = world.road_markings()
                     writer.write_json("road.json", markings.to_dict())
                     if scenario.render.visibility or images:
-                        from .render.meter import VisibilityMeter
-                        from .render.scene import RigScene
+                        from simrig.render.meter import VisibilityMeter
+                        from simrig.render.scene import RigScene
 
                         scene = RigScene(markings)
                         meter = VisibilityMeter(rig, scenario.render.visibility_scale, scene)
