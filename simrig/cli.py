@@ -100,7 +100,8 @@ def _cmd_render(args: argparse.Namespace) -> int:
 def _cmd_replay(args: argparse.Namespace) -> int:
     from .testing.replay import replay
 
-    result = replay(args.file, tracker=args.tracker, params=_params(args.param) if args.param else None, out=args.out)
+    result = replay(args.file, tracker=args.tracker, params=_params(args.param) if args.param else None, out=args.out,
+                    trust_file=args.trust_file)
     print(result.report.table())
     print()
     print(result.summary())
@@ -211,7 +212,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
     try:
         result = run_bench(args.suite, engine=args.engine, workers=args.workers, out=args.out, cache=args.cache,
-                           address=args.address, progress=not args.quiet)
+                           address=args.address, progress=not args.quiet, trust_file=args.trust_file)
     except KeyboardInterrupt:
         print("simrig: interrupted; every finished cell is kept: run the same command again to resume",
               file=sys.stderr)
@@ -275,6 +276,7 @@ def build_parser() -> argparse.ArgumentParser:
     replay.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
                         help="a tracker parameter, repeatable (default: the file's)")
     replay.add_argument("--out", type=Path, default=None, help="keep the dataset and tracks here (default: temporary)")
+    _trust_argument(replay, "the replay file")
     replay.set_defaults(run=_cmd_replay)
 
     exporter = commands.add_parser("export", help="write a dataset (and a tracker's output) for other tools")
@@ -308,6 +310,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="datasets by content key, shareable between suites (default: OUT/datasets)")
     bench.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
+    _trust_argument(bench, "the suite file")
     bench.set_defaults(run=_cmd_bench)
 
     report = commands.add_parser("report", help="write reports/SUITE/index.md with plots from a bench folder")
@@ -325,6 +328,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(run=_cmd_run)
     return parser
+
+
+def _trust_argument(parser: argparse.ArgumentParser, what: str) -> None:
+    parser.add_argument("--trust-file", action="store_true",
+                        help=f"let {what} import its module:attribute trackers (a data file may otherwise only "
+                        "name registered trackers)")
 
 
 def _scenario_arguments(parser: argparse.ArgumentParser) -> None:

@@ -48,15 +48,17 @@ def run_bench(
     cache: Path | str | None = None,
     address: str | None = None,
     progress: bool = False,
+    trust_file: bool = False,
 ) -> BenchRun:
     """Run every point of ``suite`` (a named suite or a suite file) that has not finished in ``out``
     (default ``runs/bench/SUITE``), then write the tables. ``cache`` holds the datasets by content key
-    (default ``OUT/datasets``); ``workers`` defaults to the processors of this machine."""
+    (default ``OUT/datasets``); ``workers`` defaults to the processors of this machine. ``trust_file`` allows the
+    suite's ``module:attribute`` trackers to be imported (``--trust-file``)."""
     if engine not in ENGINES:
         raise SuiteError(f"--engine {engine!r}: choose one of {', '.join(ENGINES)}")
     if workers is not None and workers < 1:
         raise SuiteError(f"--workers {workers}: must be at least 1")
-    loaded, scenarios = load_suite(suite)
+    loaded, scenarios = load_suite(suite, trust_file=trust_file)
     plan = make_plan(loaded, scenarios)
     out = Path(out) if out is not None else Path("runs") / "bench" / loaded.name
     cache = Path(cache) if cache is not None else out / "datasets"

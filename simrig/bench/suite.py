@@ -9,7 +9,7 @@ paths relative to the suite file. Example::
     frames = 100                      # optional: every scenario's own frame count when omitted
 
     [[trackers]]
-    tracker = "saga"                  # registered name or "module:attribute"
+    tracker = "saga"                  # registered name ("module:attribute" only with --trust-file)
     [[trackers]]
     label = "hungarian+dedup"         # shown in tables and plots; the tracker spec by default
     tracker = "global_hungarian"
@@ -42,6 +42,7 @@ from typing import Annotated, Any
 from pydantic import Field, ValidationError, model_validator
 
 from simrig.pipeline.track import TrackingError, build_tracker
+from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
 from simrig.scenarios import CATALOG_DIR, Scenario, ScenarioError, describe_errors, load_scenario
 from simrig.scenarios.base import Strict
 from simrig.scenarios.schema import RIG_PRESETS
@@ -149,8 +150,11 @@ def _path(name_or_path: str | Path) -> Path:
     return path
 
 
-def load_suite(name_or_path: str | Path) -> tuple[Suite, dict[str, Scenario]]:
-    """The validated suite and its scenarios by reference (as written in the suite), every check done."""
+def load_suite(name_or_path: str | Path, *, trust_file: bool = False) -> tuple[Suite, dict[str, Scenario]]:
+    """The validated suite and its scenarios by reference (as written in the suite), every check done.
+
+    A tracker given as ``module:attribute`` is refused unless ``trust_file`` (``--trust-file``): a suite file
+    is data and imports nothing on its own (:mod:`simrig.pipeline.trust`)."""
     path = _path(name_or_path)
     try:
         with path.open("rb") as handle:
@@ -170,7 +174,7 @@ def load_suite(name_or_path: str | Path) -> tuple[Suite, dict[str, Scenario]]:
             scenarios[reference] = load_scenario(target)
         except ScenarioError as error:
             raise SuiteError(f"{where}: scenarios.{index}: {error}") from None
-    _check_trackers(suite, scenarios, where)
+    _check_trackers(suite, scenarios, where, trust_file)
     _check_sweeps(suite, scenarios, where)
     return suite, scenarios
 
@@ -180,8 +184,12 @@ def tracker_runs_on(entry: TrackerEntry, scenario: Scenario) -> bool:
     return not entry.rigs or scenario.rig.preset in entry.rigs
 
 
-def _check_trackers(suite: Suite, scenarios: dict[str, Scenario], where: str) -> None:
+def _check_trackers(suite: Suite, scenarios: dict[str, Scenario], where: str, trust_file: bool) -> None:
     for index, entry in enumerate(suite.trackers):
+        try:
+            check_file_reference(entry.tracker, trusted=trust_file, where=f"{where}: trackers.{index}")
+        except TrackerReferenceError as error:
+            raise SuiteError(str(error)) from None
         try:
             build_tracker(entry.tracker, dict(entry.params))
         except TrackingError as error:

@@ -6,7 +6,6 @@ the bench and the CLI both come through here, so a user's tracker and the refere
 
 from __future__ import annotations
 
-import importlib
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,6 +14,7 @@ import simrig.trackers as tracker_registry
 from simrig.dataset import Dataset
 from simrig.dataset.tracks_file import write_tracks
 from simrig.errors import SimrigError
+from simrig.pipeline.trust import TrackerReferenceError, import_tracker_factory
 from simrig.trackers.errors import TrackerInputError
 from simrig.types import Track
 
@@ -66,15 +66,12 @@ def build_tracker(name, params: dict | None = None):
 
 
 def _import(spec: str):
-    """``"package.module:Attribute.path"`` → the object; a :class:`TrackingError` naming the spec otherwise."""
-    module_name, _, attribute = spec.partition(":")
+    """``"package.module:Attribute.path"`` → the tracker factory; a :class:`TrackingError` naming the spec when
+    it cannot be imported or is not a tracker factory (:mod:`simrig.pipeline.trust`)."""
     try:
-        target = importlib.import_module(module_name)
-        for part in attribute.split("."):
-            target = getattr(target, part)
-    except (ImportError, AttributeError) as error:
-        raise TrackingError(f"tracker {spec!r}: cannot import it ({error})") from None
-    return target
+        return import_tracker_factory(spec)
+    except TrackerReferenceError as error:
+        raise TrackingError(str(error)) from None
 
 
 def run_tracker(dataset: Dataset | Path | str, name, out: Path | str, params: dict | None = None,

@@ -19,6 +19,7 @@ from pydantic import ValidationError
 from simrig.scenarios.schema import Scenario
 
 from ..errors import SimrigError
+from ..pipeline.trust import TrackerReferenceError, check_file_reference
 from ..score import ScoreReport
 
 
@@ -113,9 +114,12 @@ class ReplayResult:
 
 
 def replay(path: Path | str, *, tracker: str | None = None, params: dict | None = None,
-           out: Path | str | None = None) -> ReplayResult:
+           out: Path | str | None = None, trust_file: bool = False) -> ReplayResult:
     """Rerun a replay file: generate its scenario with its seed (into ``out`` or a temporary folder), run its
-    tracker (or ``tracker``) with its parameters (or ``params``) and compare the headline metrics."""
+    tracker (or ``tracker``) with its parameters (or ``params``) and compare the headline metrics.
+
+    The file's own tracker may be a ``module:attribute`` only with ``trust_file`` (``--trust-file``): replay
+    files travel with bug reports and are data. ``tracker`` given here is the caller's choice."""
     import tempfile
 
     from simrig.pipeline.generate import generate
@@ -128,6 +132,11 @@ def replay(path: Path | str, *, tracker: str | None = None, params: dict | None 
     if not name:
         raise ReplayError(f"replay file {str(path)!r} names no tracker (it was an object without an importable "
                           "name); pass --tracker NAME or module:attribute")
+    if tracker is None:
+        try:
+            check_file_reference(name, trusted=trust_file, where=f"replay file {str(path)!r}")
+        except TrackerReferenceError as error:
+            raise ReplayError(str(error)) from None
     with tempfile.TemporaryDirectory(prefix="simrig-replay-") as scratch:
         root = Path(out) if out is not None else Path(scratch)
         dataset = generate(loaded.scenario, seed=loaded.seed, out=root / "dataset", overwrite=True)
