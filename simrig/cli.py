@@ -37,6 +37,15 @@ class _OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"simrig: error: {message} (see '{self.prog} --help')\n")
 
 
+def _output(path: Path | None, what: str, *, inputs=(), folder: bool = True) -> Path | None:
+    """``path`` checked as an output before any work (:func:`simrig.dataset.outputs.check_output_path`)."""
+    if path is None:
+        return None
+    from .dataset.outputs import check_output_path
+
+    return check_output_path(path, what=what, inputs=inputs, folder=folder)
+
+
 def _cmd_generate(args: argparse.Namespace) -> int:
     from simrig.pipeline.generate import generate
 
@@ -82,24 +91,36 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
 def _cmd_info(args: argparse.Namespace) -> int:
     from .dataset import Dataset
 
-    dataset = Dataset.open(args.dataset, verify=args.verify)
+    dataset = Dataset.open(args.dataset)
+    extra = dataset.verify() if args.verify else []
     print(dataset.summary())
     if args.verify:
-        print("verified  every file matches its SHA-256 in the manifest")
+        print("verified  the manifest and every file it lists match their SHA-256")
+        if extra:
+            shown = ", ".join(extra[:10]) + (f" and {len(extra) - 10} more" if len(extra) > 10 else "")
+            print(f"extra     {len(extra)} file(s) not in the manifest (not part of the dataset): {shown}")
     return 0
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
     from simrig.figures.mosaic import render_mosaic
 
-    out = args.out or Path(args.dataset) / f"mosaic_{args.frame:06d}.png"
-    print(render_mosaic(args.dataset, args.frame, out))
+    from .dataset import Dataset
+    from .dataset.manifest import MANIFEST_NAME
+
+    dataset = Dataset.open(args.dataset)
+    out = _output(args.out, "--out", folder=False) or Path(args.dataset) / f"mosaic_{args.frame:06d}.png"
+    if out.resolve().parent == dataset.path.resolve() and (
+            out.name == MANIFEST_NAME or out.name in {entry["file"] for entry in dataset.manifest["files"].values()}):
+        raise SimrigError(f"--out {str(out)!r} is one of the dataset's own files; write elsewhere")
+    print(render_mosaic(dataset.path, args.frame, out))
     return 0
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
     from .testing.replay import replay
 
+    _output(args.out, "--out")
     result = replay(args.file, tracker=args.tracker, params=_params(args.param) if args.param else None, out=args.out,
                     trust_file=args.trust_file)
     print(result.report.table())
@@ -119,12 +140,16 @@ def _cmd_export(args: argparse.Namespace) -> int:
 def _cmd_score(args: argparse.Namespace) -> int:
     from .score import score
 
+    for option in ("json", "errors"):
+        _output(getattr(args, option), f"--{option}", inputs=(args.dataset, args.tracks), folder=False)
     report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera)
     print(report.table())
     if args.json is not None:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
         report.write_json(args.json)
         print(f"wrote {args.json}")
     if args.errors is not None:
+        args.errors.parent.mkdir(parents=True, exist_ok=True)
         report.write_errors(args.errors)
         print(f"wrote {args.errors} ({report.errors.num_rows} errors with their causes)")
     return 0
@@ -159,6 +184,7 @@ def _params(pairs: list[tuple[str, object]] | None) -> dict[str, object]:
 def _cmd_track(args: argparse.Namespace) -> int:
     from simrig.pipeline.track import run_tracker
 
+    _output(args.out, "--out", inputs=(args.dataset,))
     result = run_tracker(args.dataset, args.tracker, args.out, _params(args.param))
     print(
         f"tracked   {result.frames} frames with {args.tracker}: {result.track_rows} track rows, "
@@ -185,6 +211,7 @@ def _cmd_trackers(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from simrig.pipeline.run import run_pipeline
 
+    _output(args.out, "--out")
     result = run_pipeline(
         args.scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=args.out,
         frames=args.frames, overwrite=args.overwrite, progress=not args.quiet, camera=args.camera,
@@ -210,6 +237,8 @@ def _non_negative_float(text: str) -> float:
 def _cmd_bench(args: argparse.Namespace) -> int:
     from .bench import run_bench
 
+    _output(args.out, "--out")
+    _output(args.cache, "--cache")
     try:
         result = run_bench(args.suite, engine=args.engine, workers=args.workers, out=args.out, cache=args.cache,
                            address=args.address, progress=not args.quiet, trust_file=args.trust_file)
@@ -227,6 +256,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 def _cmd_report(args: argparse.Namespace) -> int:
     from .report import write_report
 
+    _output(args.out, "--out")
     print(write_report(args.results, out=args.out))
     return 0
 

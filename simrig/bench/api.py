@@ -62,6 +62,9 @@ def run_bench(
     plan = make_plan(loaded, scenarios)
     out = Path(out) if out is not None else Path("runs") / "bench" / loaded.name
     cache = Path(cache) if cache is not None else out / "datasets"
+    if out.is_dir() and not (out / BENCH_FILE).is_file() and any(p.name != LOCK_FILE for p in out.iterdir()):
+        raise BenchError(f"bench folder {str(out)!r} is not empty and holds no {BENCH_FILE}: simrig writes only into "
+                         "a new or an earlier bench folder; choose another --out")
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out):
         return _run(plan, suite, out, cache, engine, workers, address, progress)
