@@ -12,12 +12,12 @@ replaced.
 from __future__ import annotations
 
 import re
-import tomllib
 from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
 
+from .files import read_toml, validate_strict
 from .schema import Scenario
 
 CATALOG_DIR = Path(__file__).resolve().parent
@@ -38,13 +38,7 @@ def catalog() -> dict[str, Path]:
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
-    try:
-        with path.open("rb") as handle:
-            return tomllib.load(handle)
-    except FileNotFoundError:
-        raise ScenarioError(f"scenario file {str(path)!r} does not exist") from None
-    except tomllib.TOMLDecodeError as error:
-        raise ScenarioError(f"scenario file {str(path)!r}: not valid TOML: {error}") from None
+    return read_toml(path, "scenario file", ScenarioError)
 
 
 def _merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
@@ -116,6 +110,8 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     raw = _resolve(path, ())
     raw.setdefault("name", path.stem)
     try:
-        return Scenario.model_validate(raw)
+        return validate_strict(Scenario, raw)
     except ValidationError as error:
         raise ScenarioError(f"scenario file {str(path)!r}: {describe_errors(error)}") from None
+    except ValueError as error:
+        raise ScenarioError(f"scenario file {str(path)!r}: {error}") from None

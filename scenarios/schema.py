@@ -159,3 +159,26 @@ class Scenario(Strict):
         """[s] time between two frames."""
         return 1.0 / self.frame_rate_hz
 
+
+    @model_validator(mode="after")
+    def _check_windows(self) -> Scenario:
+        """A perturbation whose window starts after the last frame can never take effect: an error, not a no-op."""
+        for index, perturbation in enumerate(self.perturbations):
+            first, _ = perturbation.frame_window(self.frame_rate_hz)
+            if first >= self.frames:
+                key = "frames" if perturbation.frames is not None else "seconds"
+                raise ValueError(f"perturbations.{index}.{key}: the window starts at frame {first}, after the last "
+                                 f"frame ({self.frames - 1}) of the run, so it would never take effect")
+        return self
+
+
+def windows_outside(scenario: Scenario, frames: int) -> list[str]:
+    """Perturbations of ``scenario`` whose window starts at or after ``frames`` (a ``--frames`` shorter than the
+    scenario's own cuts them off): one message each, for a warning."""
+    messages = []
+    for index, perturbation in enumerate(scenario.perturbations):
+        first, _ = perturbation.frame_window(scenario.frame_rate_hz)
+        if first >= frames:
+            messages.append(f"perturbations.{index} ({perturbation.kind}) starts at frame {first}, after the last "
+                            f"of the {frames} frames generated: it has no effect")
+    return messages

@@ -74,7 +74,18 @@ def _cmd_generate(args: argparse.Namespace) -> int:
                 f"warning: {event['event']} at frame {event['frame']}; the scenario ran on to its last frame",
                 file=sys.stderr,
             )
+    _warn_ineffective(scenario, result.path)
     return 0
+
+
+def _warn_ineffective(scenario, dataset_path: Path) -> None:
+    """``warning: ...`` on stderr for every setting that could not take effect in the generated dataset."""
+    from simrig.pipeline.checks import ineffective_settings
+
+    from .dataset import Dataset
+
+    for message in ineffective_settings(scenario, Dataset.open(dataset_path)):
+        print(f"warning: {message}", file=sys.stderr)
 
 
 def _cmd_scenarios(args: argparse.Namespace) -> int:
@@ -221,6 +232,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
           f"({result.tracking.frames_per_second:.0f} frames/s in step())")
     for path in result.written:
         print(f"wrote     {path}")
+    _warn_ineffective(load_scenario(args.scenario), result.written[0])
     return 0
 
 

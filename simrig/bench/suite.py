@@ -35,7 +35,6 @@ names the suite file and the entry.
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -45,6 +44,7 @@ from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
 from simrig.scenarios import CATALOG_DIR, Scenario, ScenarioError, describe_errors, load_scenario
 from simrig.scenarios.base import Strict
+from simrig.scenarios.files import read_toml, validate_strict
 from simrig.scenarios.schema import RIG_PRESETS
 
 from ..errors import SimrigError
@@ -102,7 +102,8 @@ class Sweep(Strict):
 class Suite(Strict):
     """A validated suite."""
 
-    name: Annotated[str, Field(min_length=1)]
+    name: Annotated[str, Field(pattern=r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$", max_length=100)]
+    """Names the default bench folder ``runs/bench/NAME``: letters, digits, ``_.-``, no folder part."""
     description: str = ""
     scenarios: Annotated[tuple[str, ...], Field(min_length=1)]
     seeds: Annotated[tuple[Annotated[int, Field(ge=0)], ...], Field(min_length=1)]
@@ -145,7 +146,7 @@ def _path(name_or_path: str | Path) -> Path:
     if text in entries and not Path(text).suffix:
         return entries[text]
     path = Path(text)
-    if not path.is_file():
+    if not path.exists():
         raise SuiteError(f"unknown suite {text!r}: not a named suite ({', '.join(entries)}) nor a .toml file")
     return path
 
@@ -156,16 +157,14 @@ def load_suite(name_or_path: str | Path, *, trust_file: bool = False) -> tuple[S
     A tracker given as ``module:attribute`` is refused unless ``trust_file`` (``--trust-file``): a suite file
     is data and imports nothing on its own (:mod:`simrig.pipeline.trust`)."""
     path = _path(name_or_path)
-    try:
-        with path.open("rb") as handle:
-            raw = tomllib.load(handle)
-    except tomllib.TOMLDecodeError as error:
-        raise SuiteError(f"suite file {str(path)!r}: not valid TOML: {error}") from None
+    raw = read_toml(path, "suite file", SuiteError)
     raw.setdefault("name", path.stem)
     try:
-        suite = Suite.model_validate(raw)
+        suite = validate_strict(Suite, raw)
     except ValidationError as error:
         raise SuiteError(f"suite file {str(path)!r}: {describe_errors(error)}") from None
+    except ValueError as error:
+        raise SuiteError(f"suite file {str(path)!r}: {error}") from None
     where = f"suite file {str(path)!r}"
     scenarios = {}
     for index, reference in enumerate(suite.scenarios):
