@@ -254,16 +254,138 @@ class Detection:
     embedding: np.ndarray | None = None
 
 
-@dataclass(frozen=True, eq=False)
-class SensorFrame:
-    """What a tracker sees at one time step: frame index, timestamp [s], the ego pose, the rig, and per
-    camera name the tuple of detections (an empty tuple when a camera reports nothing)."""
+LABELS: tuple[ActorClass, ...] = tuple(ActorClass)
+"""Class codes: a detection's ``label`` code indexes this tuple (``LABELS[0]`` is ``car``)."""
 
-    frame: int
-    timestamp: float
-    ego: EgoPose
-    rig: Rig
-    detections: Mapping[str, tuple[Detection, ...]]
+
+@dataclass(frozen=True, eq=False)
+class DetectionArrays:
+    """One frame's detections from every camera as flat arrays, ``M`` rows: cameras in rig order, detections
+    in camera order (row ``j`` of every array is one detection).
+
+    boxes3d: ``(M, 9)`` world-frame boxes in :data:`BOX3D_FIELDS` order [m, rad, m/s], a row of NaN where a
+    detection has no 3D estimate; boxes2d: ``(M, 4)`` pixel boxes [px]; scores: ``(M,)`` in [0, 1];
+    labels: ``(M,)`` int codes into :data:`LABELS`; cameras: ``(M,)`` int index of the camera in the rig;
+    embeddings: ``(M, D)`` appearance unit vectors, a row of NaN where a detection has none (``D`` = 0 when
+    none has one).
+    """
+
+    boxes3d: np.ndarray
+    boxes2d: np.ndarray
+    scores: np.ndarray
+    labels: np.ndarray
+    cameras: np.ndarray
+    embeddings: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=np.float32))
+
+    def __post_init__(self) -> None:
+        if len(self.embeddings) != len(self.scores):
+            object.__setattr__(self, "embeddings", np.full((len(self.scores), 0), np.nan, dtype=np.float32))
+        for name in ("boxes3d", "boxes2d", "scores", "labels", "cameras", "embeddings"):
+            getattr(self, name).setflags(write=False)  # a tracker cannot change what the next one sees
+
+    def __len__(self) -> int:
+        return len(self.scores)
+
+    def take(self, rows: np.ndarray) -> DetectionArrays:
+        """The detections at ``rows`` (an index or boolean array), in that order."""
+        return DetectionArrays(
+            self.boxes3d[rows], self.boxes2d[rows], self.scores[rows], self.labels[rows], self.cameras[rows],
+            self.embeddings[rows],
+        )
+
+    @staticmethod
+    def empty() -> DetectionArrays:
+        return DetectionArrays(
+            np.zeros((0, 9)), np.zeros((0, 4)), np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        )
+
+    def detections(self, camera_names: tuple[str, ...]) -> dict[str, tuple[Detection, ...]]:
+        """The same detections as :class:`Detection` objects per camera name (every camera present)."""
+        out: dict[str, list[Detection]] = {name: [] for name in camera_names}
+        has_3d = ~np.isnan(self.boxes3d[:, 0])
+        has_embedding = np.isfinite(self.embeddings).all(axis=1) & (self.embeddings.shape[1] > 0)
+        for row in range(len(self)):
+            out[camera_names[self.cameras[row]]].append(Detection(
+                box=Box2D(*self.boxes2d[row].tolist()),
+                score=float(self.scores[row]),
+                label=LABELS[self.labels[row]],
+                box3d=Box3D(*self.boxes3d[row].tolist()) if has_3d[row] else None,
+                embedding=self.embeddings[row] if has_embedding[row] else None,
+            ))
+        return {name: tuple(items) for name, items in out.items()}
+
+
+class SensorFrame:
+    """What a tracker sees at one time step: frame index, timestamp [s], the ego pose, the rig, and the
+    detections of every camera.
+
+    The detections are held as :class:`DetectionArrays` (``frame.arrays``: what the dataset reader gives
+    and what the reference trackers use, no per-detection objects). ``frame.detections`` is a view of the
+    same detections as a mapping camera name → tuple of :class:`Detection` (an empty tuple when a camera
+    reports nothing), built on first use. A frame can be made from either: pass ``detections`` (a mapping,
+    as a user's test does) or ``arrays``. ``images``: per camera name, the path of that camera's image for
+    this frame, when the dataset has images (empty otherwise). Immutable.
+    """
+
+    __slots__ = ("frame", "timestamp", "ego", "rig", "images", "_arrays", "_detections")
+
+    def __init__(
+        self,
+        frame: int,
+        timestamp: float,
+        ego: EgoPose,
+        rig: Rig,
+        detections: Mapping[str, tuple[Detection, ...]] | None = None,
+        *,
+        arrays: DetectionArrays | None = None,
+        images: Mapping[str, str] | None = None,
+    ) -> None:
+        if detections is not None and arrays is not None:
+            raise ValueError(f"frame {frame}: give detections or arrays, not both")
+        for name, value in (("frame", frame), ("timestamp", timestamp), ("ego", ego), ("rig", rig),
+                            ("images", dict(images or {})), ("_arrays", arrays),
+                            ("_detections", None if detections is None else dict(detections))):
+            object.__setattr__(self, name, value)
+        if detections is None and arrays is None:
+            object.__setattr__(self, "_arrays", DetectionArrays.empty())
+
+    def __setattr__(self, name: str, value) -> None:
+        raise AttributeError(f"SensorFrame is immutable: cannot set {name!r}")
+
+    def __repr__(self) -> str:
+        count = len(self._arrays) if self._arrays is not None else sum(map(len, self._detections.values()))
+        return f"SensorFrame(frame={self.frame}, timestamp={self.timestamp}, rig={self.rig.name!r}, {count} detections)"
+
+    def replace(self, **changes) -> SensorFrame:
+        """A copy with ``changes`` (as :func:`dataclasses.replace`); new ``detections`` replace the arrays and
+        new ``arrays`` replace the detections."""
+        values = {"frame": self.frame, "timestamp": self.timestamp, "ego": self.ego, "rig": self.rig,
+                  "images": self.images}
+        if "detections" not in changes and "arrays" not in changes:
+            if self._arrays is not None:
+                values["arrays"] = self._arrays
+            else:
+                values["detections"] = self._detections
+        unknown = set(changes) - {"frame", "timestamp", "ego", "rig", "images", "detections", "arrays"}
+        if unknown:
+            raise TypeError(f"SensorFrame has no field {sorted(unknown)[0]!r}")
+        return SensorFrame(**{**values, **changes})
+
+    __replace__ = replace  # copy.replace (Python 3.13)
+
+    @property
+    def detections(self) -> Mapping[str, tuple[Detection, ...]]:
+        """Per camera name, the tuple of :class:`Detection` objects (a view of :attr:`arrays`)."""
+        if self._detections is None:
+            object.__setattr__(self, "_detections", self._arrays.detections(self.rig.camera_names))
+        return self._detections
+
+    @property
+    def arrays(self) -> DetectionArrays | None:
+        """The detections as :class:`DetectionArrays` when the frame was made from arrays (the dataset reader
+        does); None for a frame made from :class:`Detection` objects (convert it with
+        ``simrig.trackers.detections.detection_arrays``, which checks every value)."""
+        return self._arrays
 
 
 @dataclass(frozen=True, eq=False)

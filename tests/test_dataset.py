@@ -142,3 +142,23 @@ def test_a_road_without_traffic_reads_back_as_empty_frames(tmp_path):
     assert frames[0].boxes.shape == (0, 9)
     assert frames[0].cameras["CAM_FRONT"].boxes.shape == (0, 4)
     assert "0–0 per frame" in dataset.summary()
+
+
+def test_sensor_frames_carry_arrays_and_the_object_view_flattens_back_to_the_same_arrays(small_dataset):
+    import pyarrow.compute as pc
+
+    from simrig.trackers.detections import detection_arrays
+
+    table = small_dataset.table("detections")
+    frames = list(small_dataset.sensor_frames())
+    assert sum(len(frame.arrays) for frame in frames) == table.num_rows  # nothing dropped in this scenario
+    for frame in frames:
+        rows = table.filter(pc.equal(table.column("frame"), frame.frame))
+        assert [frame.rig.camera_names[c] for c in frame.arrays.cameras] == rows.column("camera").to_pylist()
+        np.testing.assert_array_equal(frame.arrays.scores, rows.column("score").to_numpy())
+        rebuilt = detection_arrays(frame.replace(detections=frame.detections), require_3d=False)
+        for name in ("boxes3d", "boxes2d", "scores", "labels", "cameras", "embeddings"):
+            np.testing.assert_array_equal(getattr(rebuilt, name), getattr(frame.arrays, name), err_msg=name)
+        assert sum(len(d) for d in frame.detections.values()) == len(frame.arrays)
+    with pytest.raises(ValueError):
+        frames[0].arrays.scores[:] = 0.0  # what one tracker sees, the next one sees too

@@ -51,9 +51,8 @@ class Shuffled:
         self.inner.reset(rig=rig, seed=seed)
 
     def step(self, frame):
-        from dataclasses import replace
         shuffled = {name: tuple(self.rng.sample(list(dets), len(dets))) for name, dets in frame.detections.items()}
-        return self.inner.step(replace(frame, detections=shuffled))
+        return self.inner.step(frame.replace(detections=shuffled))
 
 
 @QUICK

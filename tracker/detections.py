@@ -1,60 +1,21 @@
-"""One frame's detections from every camera as flat arrays, checked once on the way in.
+"""One frame's detections from every camera as flat arrays (:class:`~simrig.types.DetectionArrays`), checked
+once on the way in.
 
-Trackers work on arrays, not on :class:`~simrig.types.Detection` objects: row ``j`` of every array is one
-detection, cameras in rig order and detections in camera order.
+Trackers work on arrays, not on :class:`~simrig.types.Detection` objects: a frame read from a dataset
+already carries them (``frame.arrays``); a frame a user built from ``Detection`` objects is flattened here.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 
-from simrig.types import BOX3D_FIELDS, ActorClass, SensorFrame
+from simrig.types import BOX3D_FIELDS, LABELS, ActorClass, DetectionArrays, SensorFrame
 
 from .errors import TrackerInputError
 
-LABELS: tuple[ActorClass, ...] = tuple(ActorClass)
-"""Class codes: ``labels[j]`` indexes this tuple."""
+__all__ = ["LABELS", "DetectionArrays", "detection_arrays"]
+
 _LABEL_CODE = {label: code for code, label in enumerate(LABELS)}
-
-
-@dataclass(frozen=True, eq=False)
-class DetectionArrays:
-    """Detections of one frame, ``M`` rows.
-
-    boxes3d: ``(M, 9)`` world-frame boxes in :data:`~simrig.types.BOX3D_FIELDS` order [m, rad, m/s];
-    boxes2d: ``(M, 4)`` pixel boxes [px]; scores: ``(M,)`` in [0, 1]; labels: ``(M,)`` int codes into
-    :data:`LABELS`; cameras: ``(M,)`` int index of the camera in the rig; embeddings: ``(M, D)`` appearance
-    unit vectors, a row of NaN where a detection has none (``D`` = 0 when none has one).
-    """
-
-    boxes3d: np.ndarray
-    boxes2d: np.ndarray
-    scores: np.ndarray
-    labels: np.ndarray
-    cameras: np.ndarray
-    embeddings: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=np.float32))
-
-    def __post_init__(self) -> None:
-        if len(self.embeddings) != len(self.scores):
-            object.__setattr__(self, "embeddings", np.full((len(self.scores), 0), np.nan, dtype=np.float32))
-
-    def __len__(self) -> int:
-        return len(self.scores)
-
-    def take(self, rows: np.ndarray) -> DetectionArrays:
-        """The detections at ``rows`` (an index or boolean array), in that order."""
-        return DetectionArrays(
-            self.boxes3d[rows], self.boxes2d[rows], self.scores[rows], self.labels[rows], self.cameras[rows],
-            self.embeddings[rows],
-        )
-
-    @staticmethod
-    def empty() -> DetectionArrays:
-        return DetectionArrays(
-            np.zeros((0, 9)), np.zeros((0, 4)), np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-        )
 
 
 def detection_arrays(frame: SensorFrame, *, require_3d: bool = True) -> DetectionArrays:
@@ -62,7 +23,11 @@ def detection_arrays(frame: SensorFrame, *, require_3d: bool = True) -> Detectio
 
     Raises :class:`TrackerInputError` naming the frame, camera, detection index and field for a non-finite
     value, a score outside [0, 1], an unknown camera, or (``require_3d``) a detection without a 3D box.
+    A frame that already carries arrays is only checked (vectorised), not rebuilt.
     """
+    if frame.arrays is not None:
+        _check_arrays(frame, frame.arrays, require_3d)
+        return frame.arrays
     names = frame.rig.camera_names
     unknown = sorted(set(frame.detections) - set(names))
     if unknown:
@@ -101,6 +66,30 @@ def detection_arrays(frame: SensorFrame, *, require_3d: bool = True) -> Detectio
     return out
 
 
+def _check_arrays(frame: SensorFrame, arrays: DetectionArrays, require_3d: bool) -> None:
+    """The checks of :func:`detection_arrays` on a frame that came as arrays: camera and label codes in range,
+    a 3D box where one is required, then every number."""
+    cameras = len(frame.rig.cameras)
+    if len(arrays) and (arrays.cameras.min() < 0 or arrays.cameras.max() >= cameras):
+        raise TrackerInputError(f"frame {frame.frame}: a detection's camera index is outside the rig's {cameras}")
+    if len(arrays) and (arrays.labels.min() < 0 or arrays.labels.max() >= len(LABELS)):
+        row = int(np.argmax((arrays.labels < 0) | (arrays.labels >= len(LABELS))))
+        raise TrackerInputError(f"{_where(frame, arrays, row)}: unknown label code {int(arrays.labels[row])}")
+    if require_3d:
+        missing = np.isnan(arrays.boxes3d).all(axis=1)
+        if missing.any():
+            row = int(np.argmax(missing))
+            raise TrackerInputError(f"{_where(frame, arrays, row)}: no box3d (this tracker needs a world-frame 3D box)")
+    _check_finite(frame, arrays, require_3d)
+
+
+def _where(frame: SensorFrame, arrays: DetectionArrays, row: int) -> str:
+    """'frame F, camera 'NAME', detection K' of flat row ``row`` (K counts within the camera)."""
+    camera = int(arrays.cameras[row])
+    index = int(row - np.searchsorted(arrays.cameras, camera))
+    return f"frame {frame.frame}, camera {frame.rig.camera_names[camera]!r}, detection {index}"
+
+
 def _embedding_rows(frame: SensorFrame, embeddings: list, cameras: list[int]) -> np.ndarray:
     """Stack the detections' embeddings (NaN rows where missing); one length for all, else an error naming
     the detection."""
@@ -137,18 +126,14 @@ def _check_finite(frame: SensorFrame, arrays: DetectionArrays, require_3d: bool)
             bad |= (values < 0) | (values > 1)
         if bad.any():
             row, column = np.argwhere(bad)[0]
-            camera = frame.rig.camera_names[arrays.cameras[row]]
-            index = int(row - np.searchsorted(arrays.cameras, arrays.cameras[row]))
             field = f"{name}.{columns[column]}" if columns[column] else name
             raise TrackerInputError(
-                f"frame {frame.frame}, camera {camera!r}, detection {index}: {field} is {float(values[row, column])}"
+                f"{_where(frame, arrays, row)}: {field} is {float(values[row, column])}"
                 + (" (scores must be in [0, 1])" if name == "score" and np.isfinite(values[row, column]) else "")
             )
     if np.any(arrays.boxes3d[:, 3:6] <= 0) and require_3d:
         row, column = np.argwhere(arrays.boxes3d[:, 3:6] <= 0)[0]
-        camera = frame.rig.camera_names[arrays.cameras[row]]
-        index = int(row - np.searchsorted(arrays.cameras, arrays.cameras[row]))
         raise TrackerInputError(
-            f"frame {frame.frame}, camera {camera!r}, detection {index}: "
+            f"{_where(frame, arrays, row)}: "
             f"box3d.{BOX3D_FIELDS[3 + column]} must be positive, got {arrays.boxes3d[row, 3 + column]!r}"
         )

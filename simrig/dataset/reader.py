@@ -17,11 +17,9 @@ from ..rig import rig_from_dict
 from ..types import (
     BOX2D_FIELDS,
     BOX3D_FIELDS,
-    ActorClass,
-    Box2D,
-    Box3D,
+    LABELS,
     CameraGroundTruth,
-    Detection,
+    DetectionArrays,
     EgoPose,
     GroundTruthFrame,
     Rig,
@@ -34,6 +32,20 @@ from .tables import SCHEMAS
 def _stack(table: pa.Table, names: tuple[str, ...]) -> np.ndarray:
     """``(rows, len(names))`` float array of the named columns (``(0, len(names))`` for an empty table)."""
     return np.column_stack([table.column(name).to_numpy() for name in names])
+
+
+def _embedding_matrix(column: pa.ChunkedArray) -> np.ndarray:
+    """``(R, D)`` float32 embeddings from a list<float> column; a row of NaN where a detection has none."""
+    column = column.combine_chunks()
+    lengths = np.diff(column.offsets.to_numpy())
+    dimension = int(lengths.max()) if len(lengths) else 0
+    out = np.full((len(lengths), dimension), np.nan, dtype=np.float32)
+    present = lengths == dimension
+    if not np.all(present | (lengths == 0)):
+        raise DatasetError(f"detections: embeddings of {sorted(set(lengths.tolist()))} values; one length expected")
+    if dimension:
+        out[present] = column.flatten().to_numpy(zero_copy_only=False).reshape(-1, dimension)
+    return out
 
 
 class Dataset:
@@ -195,7 +207,10 @@ class Dataset:
 
     def sensor_frames(self) -> Iterator[SensorFrame]:
         """What a tracker sees, frame by frame: a :class:`SensorFrame` per frame that was not dropped (a
-        dropped frame is skipped, so the tracker sees the time jump). No ground truth is in it."""
+        dropped frame is skipped, so the tracker sees the time jump). No ground truth is in it.
+
+        The frames carry their detections as arrays (rows sorted by camera in rig order, as written);
+        ``frame.detections`` builds :class:`~simrig.types.Detection` objects only if asked."""
         frames = self.table("frames")
         dropped = frames.column("dropped").to_numpy(zero_copy_only=False)
         table = self.table("detections")
@@ -205,30 +220,25 @@ class Dataset:
         boxes3d = _stack(table, BOX3D_FIELDS)
         scores = table.column("score").to_numpy()
         labels = table.column("label").to_pylist()
-        embedding_column = table.column("embedding").combine_chunks()
-        flat = embedding_column.flatten().to_numpy(zero_copy_only=False)
-        offsets = embedding_column.offsets.to_numpy()
         rig = self.rig
+        camera_codes = {name: code for code, name in enumerate(rig.camera_names)}
+        camera_index = np.array([camera_codes[name] for name in cameras], dtype=np.int64)
+        label_codes = {label.value: code for code, label in enumerate(LABELS)}
+        label_index = np.array([label_codes[label] for label in labels], dtype=np.int64)
+        embeddings = _embedding_matrix(table.column("embedding"))
         for row, (frame, timestamp, pose) in enumerate(self._ego_rows()):
             if dropped[row]:
                 continue
             lo, hi = np.searchsorted(det_frames, [frame, frame + 1])
-            per_camera: dict[str, list[Detection]] = {name: [] for name in rig.camera_names}
-            for i in range(lo, hi):
-                box3d = None if np.isnan(boxes3d[i, 0]) else Box3D(*boxes3d[i].tolist())
-                per_camera[cameras[i]].append(Detection(
-                    box=Box2D(*boxes2d[i].tolist()),
-                    score=float(scores[i]),
-                    label=ActorClass(labels[i]),
-                    box3d=box3d,
-                    embedding=flat[offsets[i]:offsets[i + 1]] if offsets[i + 1] > offsets[i] else None,
-                ))
             yield SensorFrame(
-                frame=frame,
-                timestamp=timestamp,
-                ego=pose,
-                rig=rig,
-                detections={name: tuple(items) for name, items in per_camera.items()},
+                frame,
+                timestamp,
+                pose,
+                rig,
+                arrays=DetectionArrays(
+                    boxes3d[lo:hi], boxes2d[lo:hi], scores[lo:hi], label_index[lo:hi], camera_index[lo:hi],
+                    embeddings[lo:hi],
+                ),
             )
 
     def summary(self) -> str:
