@@ -7,6 +7,7 @@ line ``simrig: error: ...`` with exit status 2; no traceback.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -14,9 +15,12 @@ from simrig.scenarios import DEFAULT_SCENARIO, ScenarioError, catalog, load_scen
 
 from .errors import SimrigError
 
+MAX_FRAMES = 1_000_000
+"""The most frames a scenario may ask for (``scenarios.schema.Scenario.frames``)."""
 
-def _int_at_least(minimum: int):
-    """An argparse type: an integer ≥ ``minimum``, with a one-line message otherwise."""
+
+def _int_at_least(minimum: int, maximum: int = 2**63 - 1):
+    """An argparse type: an integer in ``minimum … maximum``, with a one-line message otherwise."""
 
     def parse(text: str) -> int:
         try:
@@ -25,6 +29,8 @@ def _int_at_least(minimum: int):
             raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
         if value < minimum:
             raise argparse.ArgumentTypeError(f"must be at least {minimum}, got {value}")
+        if value > maximum:
+            raise argparse.ArgumentTypeError(f"must be at most {maximum}, got {text}")
         return value
 
     return parse
@@ -174,9 +180,12 @@ def _tracker_param(text: str) -> tuple[str, object]:
         raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
     for convert in (int, float):
         try:
-            return key, convert(raw)
+            value = convert(raw)
         except ValueError:
-            pass
+            continue
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"{key}={raw}: a parameter must be a finite number")
+        return key, value
     lowered = raw.lower()
     if lowered in ("true", "false"):
         return key, lowered == "true"
@@ -241,8 +250,8 @@ def _non_negative_float(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value >= 0.0:
-        raise argparse.ArgumentTypeError(f"must be ≥ 0, got {text}")
+    if not 0.0 <= value < math.inf:
+        raise argparse.ArgumentTypeError(f"must be a finite number ≥ 0, got {text}")
     return value
 
 
@@ -382,7 +391,7 @@ def _scenario_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
                         help=f"catalog name or .toml file (default: {DEFAULT_SCENARIO})")
     parser.add_argument("--seed", type=_int_at_least(0), default=0, help="scenario seed (default 0)")
-    parser.add_argument("--frames", type=_int_at_least(1), default=None,
+    parser.add_argument("--frames", type=_int_at_least(1, MAX_FRAMES), default=None,
                         help="frames to generate (default: the scenario's)")
 
 
