@@ -257,15 +257,18 @@ def _non_negative_float(text: str) -> float:
 
 def _cmd_bench(args: argparse.Namespace) -> int:
     from .bench import run_bench
+    from .bench.api import BenchInterrupted
 
     _output(args.out, "--out")
     _output(args.cache, "--cache")
     try:
         result = run_bench(args.suite, engine=args.engine, workers=args.workers, out=args.out, cache=args.cache,
                            address=args.address, progress=not args.quiet, trust_file=args.trust_file)
-    except KeyboardInterrupt:
-        print("simrig: interrupted; every finished cell is kept: run the same command again to resume",
-              file=sys.stderr)
+    except BenchInterrupted as stop:
+        print(f"simrig: {stop.message()}", file=sys.stderr)
+        return 130
+    except KeyboardInterrupt:  # before any cell ran (loading the suite, making the plan)
+        print("simrig: interrupted before any cell ran; nothing was lost", file=sys.stderr)
         return 130
     print(f"bench     {result.out}: {result.points} points, {result.cells} cells ({result.cells_skipped} finished "
           f"earlier, {result.cells_run} run now), {result.rows} result rows")

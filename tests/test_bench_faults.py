@@ -1,0 +1,135 @@
+"""The bench under faults: a driver killed with SIGKILL leaves no worker behind; Ctrl-C stops at once, keeps
+every finished cell, says truthfully what was lost, and the rerun computes no finished cell twice."""
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+SCENARIO = """extends = "highway_surround6"
+frames = 25
+[traffic]
+vehicles = 12
+window_radius_m = 100.0
+spawn_min_distance_m = 70.0
+[render]
+visibility = false
+"""
+SUITE = """name = "faults"
+scenarios = ["faults_scenario.toml"]
+seeds = [0, 1, 2]
+[[trackers]]
+tracker = "saga"
+[[trackers]]
+tracker = "global_hungarian"
+[[sweeps]]
+parameter = "miss_probability"
+values = [0.1, 0.3, 0.5]
+"""
+CELLS = 12
+TRACKERS = 2
+
+
+def _suite(folder: Path) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "faults_scenario.toml").write_text(SCENARIO)
+    (folder / "faults.toml").write_text(SUITE)
+    return folder / "faults.toml"
+
+
+def _group(pgid: int) -> dict[int, str]:
+    """Live (non-zombie) processes of process group ``pgid``: pid → command line, read from /proc."""
+    members = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+            command = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        fields = stat[stat.rindex(")") + 2:].split()
+        state, group = fields[0], int(fields[2])
+        if group == pgid and state != "Z":
+            members[int(entry.name)] = command
+    return members
+
+
+def _fragments(out: Path) -> dict[str, int]:
+    return {str(path.relative_to(out)): path.stat().st_mtime_ns for path in (out / "fragments").glob("*/*.json")}
+
+
+def _start(suite: Path, out: Path, workers: int) -> subprocess.Popen:
+    command = [sys.executable, "-m", "simrig.cli", "bench", str(suite), "--out", str(out), "--workers",
+               str(workers), "--quiet"]
+    return subprocess.Popen(command, start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+
+
+def test_sigkill_of_the_driver_leaves_no_simrig_process(tmp_path):
+    process = _start(_suite(tmp_path / "suite"), tmp_path / "out", workers=2)
+    deadline = time.monotonic() + 120
+    try:
+        while len(_group(process.pid)) < 3:  # the driver and its two pool workers
+            assert process.poll() is None, process.communicate()
+            assert time.monotonic() < deadline, "the pool never started"
+            time.sleep(0.05)
+        time.sleep(2.0)  # the workers are generating now
+        workers = set(_group(process.pid)) - {process.pid}
+        os.kill(process.pid, signal.SIGKILL)  # the driver only, not its group
+        process.wait()
+        time.sleep(5.0)
+        left = _group(process.pid)
+        assert not left, f"still running 5 s after the driver was killed: {left} (workers were {workers})"
+        assert len(workers) >= 3  # two pool workers and multiprocessing's resource tracker were there
+    finally:
+        if _group(process.pid):
+            os.killpg(process.pid, signal.SIGKILL)
+
+
+def _complete_cells(fragments: dict[str, int]) -> set[str]:
+    cells = [Path(path).parent.name for path in fragments]
+    return {cell for cell in cells if cells.count(cell) == TRACKERS}
+
+
+def test_ctrl_c_keeps_finished_cells_says_what_was_lost_and_the_rerun_redoes_none(tmp_path):
+    suite = _suite(tmp_path / "suite")
+    out = tmp_path / "out"
+    process = _start(suite, out, workers=1)
+    deadline = time.monotonic() + 180
+    try:
+        while len(_complete_cells(_fragments(out) if out.exists() else {})) < 2:
+            assert process.poll() is None, process.communicate()
+            assert time.monotonic() < deadline, "no two cells finished within 3 minutes"
+            time.sleep(0.05)
+        os.killpg(process.pid, signal.SIGINT)  # what Ctrl-C in a terminal does: the whole foreground group
+        interrupted = time.monotonic()
+        _, stderr = process.communicate(timeout=60)
+        stopped_in = time.monotonic() - interrupted
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 130, stderr
+    assert stopped_in < 10, f"took {stopped_in:.1f} s to stop: it waited for the running cell"
+    assert "Traceback" not in stderr, stderr
+    kept = _fragments(out)
+    complete = _complete_cells(kept)
+    match = re.search(r"interrupted: (\d+) finished cells are kept in .* \((\d+) of them this run\); "
+                      r"(\d+) running cells were stopped and their work is lost, (\d+) had not started", stderr)
+    assert match, stderr
+    said_kept, said_now, said_running, said_pending = map(int, match.groups())
+    assert said_kept == said_now == len(complete) and said_running == 1
+    assert said_kept + said_running + said_pending == CELLS
+    assert not _group(process.pid)  # the stopped worker is gone too
+    assert not (out / "results.parquet").exists()
+
+    rerun = subprocess.run([sys.executable, "-m", "simrig.cli", "bench", str(suite), "--out", str(out), "--workers",
+                            "2", "--quiet"], capture_output=True, text=True, timeout=600)
+    assert rerun.returncode == 0, rerun.stderr
+    assert f"({len(complete)} finished earlier, {CELLS - len(complete)} run now)" in rerun.stdout
+    after = _fragments(out)
+    assert {path: after[path] for path in kept} == kept  # not one finished fragment computed again
+    assert len(after) == CELLS * TRACKERS
