@@ -146,7 +146,6 @@ def test_a_road_without_traffic_reads_back_as_empty_frames(tmp_path):
 
 def test_sensor_frames_carry_arrays_and_the_object_view_flattens_back_to_the_same_arrays(small_dataset):
     import pyarrow.compute as pc
-
     from simrig.trackers.detections import detection_arrays
 
     table = small_dataset.table("detections")

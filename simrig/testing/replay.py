@@ -118,6 +118,7 @@ def replay(path: Path | str, *, tracker: str | None = None, params: dict | None 
     tracker (or ``tracker``) with its parameters (or ``params``) and compare the headline metrics."""
     import tempfile
 
+    from simrig.dataset import Dataset
     from simrig.pipeline.generate import generate
     from simrig.pipeline.track import run_tracker
 
@@ -130,9 +131,9 @@ def replay(path: Path | str, *, tracker: str | None = None, params: dict | None 
                           "name); pass --tracker NAME or module:attribute")
     with tempfile.TemporaryDirectory(prefix="simrig-replay-") as scratch:
         root = Path(out) if out is not None else Path(scratch)
-        dataset = generate(loaded.scenario, seed=loaded.seed, out=root / "dataset", overwrite=True)
-        run = run_tracker(dataset.path, name, root / "tracks", loaded.params if params is None else params)
-        report = score(dataset.path, run.out, camera=loaded.camera)
+        dataset = Dataset.open(generate(loaded.scenario, seed=loaded.seed, out=root / "dataset", overwrite=True).path)
+        run = run_tracker(dataset, name, root / "tracks", loaded.params if params is None else params)
+        report = score(dataset, run.tracks, camera=loaded.camera)
     now = headline(report)
     differences = {}
     for dimension, metrics in loaded.scores.items():
