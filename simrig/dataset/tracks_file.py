@@ -77,13 +77,10 @@ class TrackSet:
     tracks2d: TrackRows | None
 
 
-def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]]) -> Path:
-    """Write ``(frame, tracks)`` pairs (as returned by a tracker, frame by frame) to the folder ``out``:
-    ``tracks3d.parquet`` from the tracks' 3D boxes and ``tracks2d.parquet`` from their per-camera boxes
-    (each written only when some track has such boxes; both are written, possibly empty, when none has).
-    Files are written to a temporary name and renamed, so an interrupted write leaves no partial table."""
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+def track_tables(frames: Iterable[tuple[int, Iterable[Track]]]) -> dict[str, pa.Table]:
+    """The tables of ``(frame, tracks)`` pairs (as returned by a tracker, frame by frame), by file name:
+    ``tracks3d.parquet`` from the tracks' 3D boxes and ``tracks2d.parquet`` from their per-camera boxes (each
+    present only when some track has such boxes; both, empty, when none has)."""
     rows3d, rows2d = [], []
     for frame, tracks in frames:
         for track in tracks:
@@ -97,6 +94,15 @@ def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]])
         tables[TRACKS3D_FILE] = _table(rows3d, TRACKS3D_SCHEMA)
     if rows2d or not rows3d:
         tables[TRACKS2D_FILE] = _table(rows2d, TRACKS2D_SCHEMA)
+    return tables
+
+
+def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]] | dict[str, pa.Table]) -> Path:
+    """Write ``(frame, tracks)`` pairs (or the tables :func:`track_tables` made of them) to the folder ``out``.
+    Files are written to a temporary name and renamed, so an interrupted write leaves no partial table."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    tables = frames if isinstance(frames, dict) else track_tables(frames)
     for name in (TRACKS3D_FILE, TRACKS2D_FILE):
         if name not in tables and (out / name).exists():
             (out / name).unlink()  # a stale table from an earlier run must not be scored with this one
@@ -105,6 +111,14 @@ def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]])
         pq.write_table(table, partial)
         os.replace(partial, out / name)
     return out
+
+
+def tracks_in_memory(tables: dict[str, pa.Table], *, frame_count: int, cameras: tuple[str, ...],
+                     source: str = "tracker output") -> TrackSet:
+    """A validated :class:`TrackSet` of :func:`track_tables`' tables, without a round trip through files:
+    the same checks as :func:`read_tracks`, errors naming ``source``."""
+    rows = {name: _rows(f"{source} ({name})", table, name, frame_count, cameras) for name, table in tables.items()}
+    return TrackSet(source=source, tracks3d=rows.get(TRACKS3D_FILE), tracks2d=rows.get(TRACKS2D_FILE))
 
 
 def _table(rows: list[tuple], schema: pa.Schema) -> pa.Table:
@@ -139,11 +153,16 @@ def _layout_of(file: Path) -> str:
 
 
 def _read(file: Path, layout: str, frame_count: int, cameras: tuple[str, ...]) -> TrackRows:
-    schema = TRACKS3D_SCHEMA if layout == TRACKS3D_FILE else TRACKS2D_SCHEMA
     try:
         table = pq.read_table(file)
     except (pa.ArrowInvalid, OSError) as error:
         raise TracksError(f"{file}: not a readable Parquet file ({error})") from None
+    return _rows(file, table, layout, frame_count, cameras)
+
+
+def _rows(file: Path | str, table: pa.Table, layout: str, frame_count: int, cameras: tuple[str, ...]) -> TrackRows:
+    """Validate ``table`` (``layout``: which file it is) and sort it; errors name ``file``, column and row."""
+    schema = TRACKS3D_SCHEMA if layout == TRACKS3D_FILE else TRACKS2D_SCHEMA
     missing = [name for name in schema.names if name not in table.column_names]
     if missing:
         raise TracksError(f"{file}: missing column(s) {', '.join(missing)} (a {layout} file has: "
@@ -207,7 +226,7 @@ def _read(file: Path, layout: str, frame_count: int, cameras: tuple[str, ...]) -
     )
 
 
-def _column(file: Path, table: pa.Table, field: pa.Field) -> np.ndarray:
+def _column(file: Path | str, table: pa.Table, field: pa.Field) -> np.ndarray:
     """One column as numpy in the field's type; errors name the column (and the first null's row)."""
     column = table.column(field.name)
     if column.null_count:

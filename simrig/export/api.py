@@ -19,8 +19,8 @@ from ..dataset import Dataset
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import check_output_path, partial_sibling, remove_stale_partials
 from ..errors import SimrigError
-from ..score.ground_truth import GroundTruth, load_ground_truth
-from ..score.inputs import project_tracks
+from ..scoring.ground_truth import GroundTruth, load_ground_truth
+from ..scoring.inputs import project_tracks
 
 
 class ExportError(SimrigError):

@@ -11,10 +11,11 @@ import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
+from simrig.dataset import Dataset
 from simrig.pipeline.generate import generate
 from simrig.pipeline.track import TrackingRun, build_tracker, run_tracker
 from simrig.scenarios import Scenario, load_scenario
-from simrig.score import ScoreReport, score
+from simrig.scoring import ScoreReport, score
 
 
 @dataclass(frozen=True)
@@ -45,9 +46,10 @@ def run_pipeline(
     loaded = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     out = Path(out) if out is not None else Path("runs") / f"{loaded.name}-seed{seed}"
     build_tracker(tracker, params)  # checked early: a typo should not cost a generation
-    dataset = generate(loaded, seed=seed, out=out / "dataset", frames=frames, overwrite=overwrite, progress=progress)
-    tracking = run_tracker(dataset.path, tracker, out / "tracks" / tracker, params)
-    report = score(dataset.path, tracking.out, camera=camera)
+    generated = generate(loaded, seed=seed, out=out / "dataset", frames=frames, overwrite=overwrite, progress=progress)
+    dataset = Dataset.open(generated.path)
+    tracking = run_tracker(dataset, tracker, out / "tracks" / tracker, params)
+    report = score(dataset, tracking.tracks, camera=camera)  # scored in memory; the folder is for the user
     json_path, errors_path, markdown = out / "score.json", out / "errors.parquet", out / "report.md"
     report.write_json(json_path)
     report.write_errors(errors_path)

@@ -1,4 +1,4 @@
-"""``track``: run a registered tracker over a dataset's sensor frames and write its tracks.
+"""``track``: run a registered tracker over a dataset's sensor frames; its tracks in memory, and on disk when asked.
 
 The tracker sees exactly what :meth:`~simrig.dataset.Dataset.sensor_frames` yields (no ground truth);
 the bench and the CLI both come through here, so a user's tracker and the reference trackers are run alike.
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import simrig.trackers as tracker_registry
 from simrig.dataset import Dataset
-from simrig.dataset.tracks_file import write_tracks
+from simrig.dataset.tracks_file import TrackSet, track_tables, tracks_in_memory, write_tracks
 from simrig.errors import SimrigError
 from simrig.pipeline.trust import TrackerReferenceError, import_tracker_factory
 from simrig.trackers.errors import TrackerInputError
@@ -23,15 +23,17 @@ class TrackingError(SimrigError):
     """A tracker could not be built or rejected its input; the message names the tracker and the frame."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class TrackingRun:
-    """Where the tracks went and how long the tracker's ``step`` calls took in total [s] (reading the
-    dataset and writing the tracks excluded)."""
+    """A tracker's output (``tracks``, validated, ready for :func:`simrig.scoring.score`), where it was written
+    (``out``, None when it was kept in memory only) and how long the tracker's ``step`` calls took in total
+    [s] (reading the dataset and writing the tracks excluded)."""
 
-    out: Path
+    out: Path | None
     frames: int
     track_rows: int
     step_seconds: float
+    tracks: TrackSet
 
     @property
     def frames_per_second(self) -> float:
@@ -74,12 +76,12 @@ def _import(spec: str):
         raise TrackingError(str(error)) from None
 
 
-def run_tracker(dataset: Dataset | Path | str, name, out: Path | str, params: dict | None = None,
+def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = None, params: dict | None = None,
                 *, seed: int | None = None) -> TrackingRun:
     """Build tracker ``name`` (anything :func:`build_tracker` takes) with ``params``, ``reset`` it on the
-    dataset's rig (``seed`` defaults to the dataset's), step it over every sensor frame and write its tracks to
-    the folder ``out``. A tracker with a ``finish()`` method (semi-online) has its answer for each frame written
-    instead of ``step``'s."""
+    dataset's rig (``seed`` defaults to the dataset's), step it over every sensor frame, and keep its tracks
+    (``TrackingRun.tracks``); with ``out``, also write them to that folder. A tracker with a ``finish()``
+    method (semi-online) has its answer for each frame kept instead of ``step``'s."""
     if not isinstance(dataset, Dataset):
         dataset = Dataset.open(dataset)
     tracker = build_tracker(name, params)
@@ -100,5 +102,13 @@ def run_tracker(dataset: Dataset | Path | str, name, out: Path | str, params: di
         revised = dict(finish())
         elapsed += time.perf_counter() - start
         outputs = [(index, revised.get(index, tracks)) for index, tracks in outputs]
-    path = write_tracks(out, outputs)
-    return TrackingRun(path, len(outputs), sum(len(t) for _, t in outputs), elapsed)
+    tables = track_tables(outputs)
+    tracks = tracks_in_memory(tables, frame_count=dataset.frame_count, cameras=dataset.rig.camera_names,
+                              source=f"tracker {_display(name)!r}")
+    path = write_tracks(out, tables) if out is not None else None
+    return TrackingRun(path, len(outputs), sum(len(t) for _, t in outputs), elapsed, tracks)
+
+
+def _display(name) -> str:
+    """A tracker reference as a user would name it."""
+    return name if isinstance(name, str) else getattr(name, "__qualname__", type(name).__name__)

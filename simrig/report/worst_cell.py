@@ -24,7 +24,7 @@ from simrig.scenarios import Scenario
 
 from ..dataset import Dataset
 from ..errors import DatasetError
-from ..score import score
+from ..scoring import score
 from .groups import group_of
 from .load import BenchResults, ReportError
 
@@ -69,7 +69,7 @@ def inspect_worst(bench: BenchResults, out: Path) -> WorstCell:
         dataset = _dataset(bench, row["cell"], Path(scratch))
         run = run_tracker(dataset, entry["tracker"], Path(scratch) / "tracks", dict(entry.get("params") or {}),
                           seed=int(row["seed"]))
-        report = score(dataset, run.out, camera=entry.get("camera"))
+        report = score(dataset, run.tracks, camera=entry.get("camera"))
         errors = report.errors.to_pandas()
         switches = errors[(errors["kind"] == "IDS") & (errors["dimension"] == group.dimension)]
         if len(switches) != int(row[group.switches]):

@@ -21,7 +21,7 @@ from simrig.scenarios.schema import Scenario
 
 from ..errors import SimrigError
 from ..pipeline.trust import TrackerReferenceError, check_file_reference
-from ..score import ScoreReport
+from ..scoring import ScoreReport
 
 
 class ReplayError(SimrigError):
@@ -135,10 +135,11 @@ def replay(path: Path | str, *, tracker: str | None = None, params: dict | None 
     files travel with bug reports and are data. ``tracker`` given here is the caller's choice."""
     import tempfile
 
+    from simrig.dataset import Dataset
     from simrig.pipeline.generate import generate
     from simrig.pipeline.track import run_tracker
 
-    from ..score import score
+    from ..scoring import score
 
     loaded = load_replay(path)
     name = tracker or loaded.tracker
@@ -152,9 +153,9 @@ def replay(path: Path | str, *, tracker: str | None = None, params: dict | None 
             raise ReplayError(str(error)) from None
     with tempfile.TemporaryDirectory(prefix="simrig-replay-") as scratch:
         root = Path(out) if out is not None else Path(scratch)
-        dataset = generate(loaded.scenario, seed=loaded.seed, out=root / "dataset", overwrite=True)
-        run = run_tracker(dataset.path, name, root / "tracks", loaded.params if params is None else params)
-        report = score(dataset.path, run.out, camera=loaded.camera)
+        dataset = Dataset.open(generate(loaded.scenario, seed=loaded.seed, out=root / "dataset", overwrite=True).path)
+        run = run_tracker(dataset, name, root / "tracks", loaded.params if params is None else params)
+        report = score(dataset, run.tracks, camera=loaded.camera)
     now = headline(report)
     differences = {}
     for dimension, metrics in loaded.scores.items():

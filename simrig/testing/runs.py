@@ -18,7 +18,7 @@ from simrig.pipeline.track import run_tracker as run_on_dataset
 from simrig.scenarios.schema import Scenario
 
 from ..dataset import Dataset
-from ..score import ScoreReport, score
+from ..scoring import ScoreReport, score
 
 Scores = ScoreReport
 """What :func:`run_tracker` returns: the full score report (``.metrics3d``, ``.metrics2d``, ``.errors``)."""
@@ -87,7 +87,6 @@ def run_tracker(tracker, scenario: Scenario, *, seed: int = 0, params: dict | No
     spec = tracker_spec(tracker)
     run = Run(scenario, seed, spec, dict(params or {}))
     _RUNS.append(run)
-    folder = Path(tempfile.mkdtemp(prefix="tracks-", dir=_root()))
-    outcome = run_on_dataset(dataset, tracker, folder, params)
-    run.scores = score(dataset, outcome.out, camera=camera)
+    outcome = run_on_dataset(dataset, tracker, None, params)
+    run.scores = score(dataset, outcome.tracks, camera=camera)
     return run.scores

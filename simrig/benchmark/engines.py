@@ -23,7 +23,6 @@ from ..lifeline import die_with
 from .evaluate import Outcome, evaluate
 from .plan import Job
 
-ENGINES = ("local", "ray")
 Finished = tuple[Job, list[Outcome], float]
 class Interrupted(KeyboardInterrupt):
     """Ctrl-C during a bench: ``running`` cells were stopped (their work is lost; ``None`` when the engine

@@ -7,18 +7,16 @@ temporary folder and are deleted; a cell's tracks can be made again exactly (sam
 from __future__ import annotations
 
 import math
-import tempfile
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 from simrig.pipeline.cache import cached_dataset
 from simrig.pipeline.track import run_tracker
-from simrig.score.results import METRICS_2D, METRICS_3D
+from simrig.scoring.results import METRICS_2D, METRICS_3D
 
 from ..errors import SimrigError
-from ..score import ScoreReport, score
-from ..score.attribution import errors_by_cause
+from ..scoring import ScoreReport, score
+from ..scoring.attribution import errors_by_cause
 from .plan import Job
 
 METRIC_COLUMNS = (*(f"3d_{name}" for name in METRICS_3D), *(f"2d_{name}" for name in METRICS_2D))
@@ -53,18 +51,17 @@ def evaluate(job: Job) -> tuple[list[Outcome], float]:
         raise BenchError(f"{where}: {error}") from None
     dataset_s = time.perf_counter() - started
     outcomes = []
-    with tempfile.TemporaryDirectory(prefix="simrig-bench-") as folder:
-        for key, entry in job.trackers:
-            try:
-                run = run_tracker(dataset, entry.tracker, Path(folder) / key, dict(entry.params), seed=job.seed)
-                scoring_started = time.perf_counter()
-                report = score(dataset, run.out, camera=entry.camera)
-            except SimrigError as error:
-                raise BenchError(f"{where}, tracker {entry.name}: {error}") from None
-            except Exception as error:  # a user's tracker failing: keep its traceback as the cause
-                raise BenchError(f"{where}, tracker {entry.name}: {type(error).__name__}: {error}") from error
-            outcomes.append(Outcome(job.cell, key, metric_values(report), cause_counts(report),
-                                    run.step_seconds, time.perf_counter() - scoring_started))
+    for key, entry in job.trackers:
+        try:
+            run = run_tracker(dataset, entry.tracker, None, dict(entry.params), seed=job.seed)  # tracks in memory
+            scoring_started = time.perf_counter()
+            report = score(dataset, run.tracks, camera=entry.camera)
+        except SimrigError as error:
+            raise BenchError(f"{where}, tracker {entry.name}: {error}") from None
+        except Exception as error:  # a user's tracker failing: keep its traceback as the cause
+            raise BenchError(f"{where}, tracker {entry.name}: {type(error).__name__}: {error}") from error
+        outcomes.append(Outcome(job.cell, key, metric_values(report), cause_counts(report),
+                                run.step_seconds, time.perf_counter() - scoring_started))
     return outcomes, dataset_s
 
 
