@@ -205,7 +205,8 @@ def _cmd_track(args: argparse.Namespace) -> int:
     from simrig.pipeline.track import run_tracker
 
     _output(args.out, "--out", inputs=(args.dataset,))
-    result = run_tracker(args.dataset, args.tracker, args.out, _params(args.param))
+    result = run_tracker(args.dataset, args.tracker, args.out, _params(args.param),
+                         frame_time_limit_s=args.frame_time_limit)
     print(
         f"tracked   {result.frames} frames with {args.tracker}: {result.track_rows} track rows, "
         f"{result.frames_per_second:.0f} frames/s in step()"
@@ -231,17 +232,25 @@ def _cmd_trackers(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from simrig.pipeline.run import run_pipeline
 
+    from .dataset import Dataset
+
     _output(args.out, "--out")
     result = run_pipeline(
         args.scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=args.out,
         frames=args.frames, overwrite=args.overwrite, progress=not args.quiet, camera=args.camera,
+        frame_time_limit_s=args.frame_time_limit,
     )
+    manifest = Dataset.open(result.dataset).manifest
+    if result.reused:
+        print(f"dataset   reusing the complete dataset in {result.dataset} ({manifest['scenario']['name']}, "
+              f"seed {manifest['seed']}, {manifest['frames']} frames: the same resolved scenario and seed)\n")
     print(result.report.table())
     print(f"\ntracked   {result.tracking.frames} frames with {args.tracker} "
           f"({result.tracking.frames_per_second:.0f} frames/s in step())")
     for path in result.written:
         print(f"wrote     {path}")
-    _warn_ineffective(load_scenario(args.scenario), result.written[0])
+    if not result.reused:
+        _warn_ineffective(result.scenario, result.dataset)
     return 0
 
 
@@ -403,6 +412,8 @@ def _tracker_arguments(parser: argparse.ArgumentParser) -> None:
                         "'simrig trackers')")
     parser.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
                         help="a tracker parameter, repeatable (e.g. --param gate=4 --param life=mutr3d)")
+    parser.add_argument("--frame-time-limit", type=_non_negative_float, default=60.0, metavar="SECONDS",
+                        help="stop the tracker when one step() runs longer than this (default 60; 0: no limit)")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -196,6 +196,21 @@ CASES = [
     ("tracker-not-factory", "track {ds} --tracker os:system --out {out}", "'os:system' is a builtin_function_or_"
                                                                           "method, not a tracker factory"),
     ("tracker-not-importable", "track {ds} --tracker no_such_module:X --out {out}", "cannot import it"),
+    *[(f"tracker-{mode}", f"track {{ds}} --tracker misbehaving_trackers:Misbehaving --param mode={mode} --out {{out}}",
+       expected) for mode, expected in (
+        ("raise", "'misbehaving_trackers:Misbehaving': frame 2: step() raised ZeroDivisionError"),
+        ("dict", "frame 2: step() returned a dict, not a list of Track"),
+        ("none", "frame 2: step() returned a NoneType, not a list of Track"),
+        ("string_ids", "frame 2: item 0: track_id 'a' is not an integer"),
+        ("float_ids", "frame 2: item 0: track_id 1.7 is not an integer"),
+        ("bool_ids", "frame 2: item 0: track_id True is not an integer"),
+        ("duplicate_ids", "frame 2: track 1: track_id appears twice in this frame"),
+        ("unknown_label", "frame 2: track 1: label 'plane' is not a known class"),
+        ("nan_score", "frame 2: track 1: score nan is not a finite number"),
+        ("nan_box", "frame 2: track 1: box3d has a non-finite value"),
+        ("unknown_camera", "frame 2: track 1: boxes2d names camera 'NOWHERE'"),
+        ("not_tracks", "frame 2: item 0 is a str, not a Track"),
+    )],
     ("run-tracker-unknown", "run --frames 2 --tracker nowhere --out {out}", "unknown tracker 'nowhere'"),
     ("run-param-nan", "run --frames 2 --param gate=nan --out {out}", "gate=nan"),
     ("out-under-a-file", "track {ds} --out {root}/binary.toml/tracks", "which is a file"),
@@ -266,7 +281,7 @@ CASES = [
 @pytest.mark.parametrize(("argv", "expected"), [case[1:] for case in CASES], ids=[case[0] for case in CASES])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing_complete(argv, expected, inputs, tmp_path, capsys,
                                                                   monkeypatch):
-    monkeypatch.syspath_prepend(str(HERE))  # bench_trackers, for the untrusted-import case
+    monkeypatch.syspath_prepend(str(HERE))  # bench_trackers and misbehaving_trackers
     monkeypatch.chdir(tmp_path)  # default output folders (runs/...) land here, where they are checked
     out = tmp_path / "out"
     words = [word.format(root=inputs["root"], ds=inputs["ds"], tracks=inputs["tracks"], out=out)

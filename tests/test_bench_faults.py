@@ -133,3 +133,28 @@ def test_ctrl_c_keeps_finished_cells_says_what_was_lost_and_the_rerun_redoes_non
     after = _fragments(out)
     assert {path: after[path] for path in kept} == kept  # not one finished fragment computed again
     assert len(after) == CELLS * TRACKERS
+
+
+def test_a_tracker_that_hangs_on_frame_3_is_stopped_and_its_rows_say_it_timed_out(tmp_path, monkeypatch):
+    import pyarrow.parquet as pq
+
+    from simrig.benchmark import run_bench
+
+    folder = tmp_path / "suite"
+    _suite(folder)
+    (folder / "hang.toml").write_text(
+        'name = "hang"\nscenarios = ["faults_scenario.toml"]\nseeds = [0, 1]\nframes = 8\nframe_time_limit_s = 2\n'
+        '[[trackers]]\ntracker = "saga"\n[[trackers]]\ntracker = "bench_trackers:HangsOnFrame3"\n')
+    monkeypatch.syspath_prepend(str(Path(__file__).parent))
+    monkeypatch.setenv("PYTHONPATH", str(Path(__file__).parent))  # for the spawned pool workers
+    started = time.monotonic()
+    run = run_bench(folder / "hang.toml", out=tmp_path / "out", workers=2, trust_file=True)
+    assert time.monotonic() - started < 120
+    rows = pq.read_table(run.results).to_pandas()
+    hung = rows[rows["tracker"] == "bench_trackers:HangsOnFrame3"]
+    fine = rows[rows["tracker"] == "saga"]
+    assert len(hung) == len(fine) == 2
+    assert all(text.startswith("timeout: tracker 'bench_trackers:HangsOnFrame3': frame 3: step() did not return "
+                               "within 2 s") for text in hung["failure"])
+    assert hung["3d_AMOTA"].isna().all() and hung["2d_HOTA"].isna().all()
+    assert fine["failure"].isna().all() and fine["2d_HOTA"].notna().all()

@@ -49,6 +49,8 @@ class Job:
     frames: int
     cache: Path
     trackers: tuple[tuple[str, TrackerEntry], ...]
+    frame_time_limit_s: float = 60.0
+    """[s] limit on one tracker call (the suite's ``frame_time_limit_s``; 0: none)."""
 
 
 def tracker_key(entry: TrackerEntry) -> str:
@@ -82,7 +84,7 @@ class Plan:
             pending = tuple(pair for pair in pairs if (key, pair[0]) not in finished)
             if pending:
                 scenario, seed, frames = self.cells[key]
-                out.append(Job(key, scenario, seed, frames, cache, pending))
+                out.append(Job(key, scenario, seed, frames, cache, pending, self.suite.frame_time_limit_s))
         return out
 
 

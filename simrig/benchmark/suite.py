@@ -7,6 +7,7 @@ paths relative to the suite file. Example::
     scenarios = ["highway_surround6", "my_scenario.toml"]
     seeds = [0, 1, 2]
     frames = 100                      # optional: every scenario's own frame count when omitted
+    frame_time_limit_s = 60           # optional: a step() running longer is stopped, recorded as a failure
 
     [[trackers]]
     tracker = "saga"                  # registered name ("module:attribute" only with --trust-file)
@@ -111,8 +112,11 @@ class Suite(Strict):
     description: str = ""
     scenarios: Annotated[tuple[str, ...], Field(min_length=1)]
     seeds: Annotated[tuple[Annotated[int, Field(ge=0)], ...], Field(min_length=1)]
-    frames: Annotated[int, Field(ge=1)] | None = None
+    frames: Annotated[int, Field(ge=1, le=1_000_000)] | None = None
     """[-] frames of every cell; each scenario's own when omitted."""
+    frame_time_limit_s: Annotated[float, Field(ge=0, le=86_400, allow_inf_nan=False)] = 60.0
+    """[s] a tracker call (one ``step()``) that runs longer is stopped and that tracker's rows of the cell record
+    the timeout (``failure``) instead of metrics; 0: no limit."""
     base: bool = True
     """Also run each scenario with its own settings (besides the sweeps)."""
     trackers: Annotated[tuple[TrackerEntry, ...], Field(min_length=1)]
