@@ -9,35 +9,18 @@ import sys
 import time
 from pathlib import Path
 
-SCENARIO = """extends = "highway_surround6"
-frames = 25
-[traffic]
-vehicles = 12
-window_radius_m = 100.0
-spawn_min_distance_m = 70.0
-[render]
-visibility = false
-"""
-SUITE = """name = "faults"
-scenarios = ["faults_scenario.toml"]
-seeds = [0, 1, 2]
-[[trackers]]
-tracker = "saga"
-[[trackers]]
-tracker = "global_hungarian"
-[[sweeps]]
-parameter = "miss_probability"
-values = [0.1, 0.3, 0.5]
-"""
+from test_bench import TINY_SCENARIO, TINY_SUITE
+
 CELLS = 12
 TRACKERS = 2
 
 
 def _suite(folder: Path) -> Path:
+    """test_bench's tiny suite: 12 cells (3 seeds × 4 miss probabilities of one scenario), 2 trackers."""
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "faults_scenario.toml").write_text(SCENARIO)
-    (folder / "faults.toml").write_text(SUITE)
-    return folder / "faults.toml"
+    (folder / "tiny_scenario.toml").write_text(TINY_SCENARIO)
+    (folder / "tiny.toml").write_text(TINY_SUITE)
+    return folder / "tiny.toml"
 
 
 def _group(pgid: int) -> dict[int, str]:
@@ -143,7 +126,7 @@ def test_a_tracker_that_hangs_on_frame_3_is_stopped_and_its_rows_say_it_timed_ou
     folder = tmp_path / "suite"
     _suite(folder)
     (folder / "hang.toml").write_text(
-        'name = "hang"\nscenarios = ["faults_scenario.toml"]\nseeds = [0, 1]\nframes = 8\nframe_time_limit_s = 2\n'
+        'name = "hang"\nscenarios = ["tiny_scenario.toml"]\nseeds = [0, 1]\nframes = 8\nframe_time_limit_s = 2\n'
         '[[trackers]]\ntracker = "saga"\n[[trackers]]\ntracker = "bench_trackers:HangsOnFrame3"\n')
     monkeypatch.syspath_prepend(str(Path(__file__).parent))
     monkeypatch.setenv("PYTHONPATH", str(Path(__file__).parent))  # for the spawned pool workers
