@@ -26,7 +26,9 @@ def test_run_killed_at_ten_random_moments_resumes_to_the_same_bytes(tmp_path):
     duration = time.monotonic() - started
     assert reference.returncode == 0, reference.stderr
     expected = {name: (tmp_path / "reference" / name).read_bytes() for name in RESULTS}
-    moments = sorted(random.Random(23).uniform(0.2, duration) for _ in range(10))
+    draw = random.Random(23)
+    moments = sorted(draw.uniform(0.2, duration) for _ in range(10))
+    assert len(set(moments)) == 10
     outcomes = []
     for trial, moment in enumerate(moments):
         out = tmp_path / f"killed-{trial}"
