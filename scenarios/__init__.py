@@ -14,27 +14,44 @@ from __future__ import annotations
 import re
 import tomllib
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from pydantic import ValidationError
+if TYPE_CHECKING:
+    from pydantic import ValidationError
 
-from .schema import Scenario
+    from .schema import Scenario
 
 CATALOG_DIR = Path(__file__).resolve().parent
+SUITES_DIR = CATALOG_DIR / "suites"
 DEFAULT_SCENARIO = "highway_surround6"
 _NAMED_MESSAGE = re.compile(r"^([a-z_]+(?:, [a-z_]+)*): (.*)$")
 
-__all__ = ["CATALOG_DIR", "DEFAULT_SCENARIO", "Scenario", "ScenarioError", "catalog", "describe_errors",
-           "load_scenario"]
+__all__ = ["CATALOG_DIR", "DEFAULT_SCENARIO", "SUITES_DIR", "Scenario", "ScenarioError", "catalog",
+           "describe_errors", "load_scenario", "suite_catalog"]
 
 
 class ScenarioError(ValueError):
     """A scenario cannot be found or is invalid; the message names the file and the key."""
 
 
+def __getattr__(name: str):
+    """``Scenario`` on first use: the schema (pydantic) loads only when a scenario is validated, so that listing
+    the catalog or building the command line stays cheap."""
+    if name == "Scenario":
+        from .schema import Scenario
+
+        return Scenario
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 def catalog() -> dict[str, Path]:
     """Catalog entries by name, sorted by name."""
     return {path.stem: path for path in sorted(CATALOG_DIR.glob("*.toml"))}
+
+
+def suite_catalog() -> dict[str, Path]:
+    """Named bench suites (``simrig bench NAME``) by name, sorted by name."""
+    return {path.stem: path for path in sorted(SUITES_DIR.glob("*.toml"))}
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
@@ -113,6 +130,10 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
             raise ScenarioError(
                 f"unknown scenario {text!r}: not a catalog name ({', '.join(entries)}) nor a .toml file"
             )
+    from pydantic import ValidationError
+
+    from .schema import Scenario
+
     raw = _resolve(path, ())
     raw.setdefault("name", path.stem)
     try:

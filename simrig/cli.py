@@ -116,7 +116,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
 
 def _cmd_score(args: argparse.Namespace) -> int:
-    from .score import score
+    from .scoring import score
 
     report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera)
     print(report.table())
@@ -207,7 +207,7 @@ def _non_negative_float(text: str) -> float:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from .bench import run_bench
+    from .benchmark import run_bench
 
     try:
         result = run_bench(args.suite, engine=args.engine, workers=args.workers, out=args.out, cache=args.cache,
@@ -294,8 +294,8 @@ def build_parser() -> argparse.ArgumentParser:
     trackers = commands.add_parser("trackers", help="list the registered trackers and their parameters")
     trackers.set_defaults(run=_cmd_trackers)
 
-    from .bench.engines import ENGINES
-    from .bench.suite import suite_catalog
+    from simrig.benchmark.engine_names import ENGINES
+    from simrig.scenarios import suite_catalog
 
     bench = commands.add_parser("bench", help="run a suite: scenarios x trackers x seeds x sweeps, resumable")
     bench.add_argument("suite", help=f"named suite ({', '.join(suite_catalog())}) or a suite .toml file")

@@ -15,13 +15,13 @@ import pyarrow.parquet as pq
 import pytest
 from simrig.scenarios import load_scenario
 
-from simrig.bench import BenchError, run_bench
-from simrig.bench.parameters import apply_parameter
+from simrig.benchmark import BenchError, run_bench
+from simrig.benchmark.parameters import apply_parameter
 from simrig.pipeline.cache import dataset_key
 from simrig.pipeline.generate import generate
 from simrig.pipeline.track import run_tracker
 from simrig.report import ReportError, write_report
-from simrig.score import score
+from simrig.scoring import score
 
 TESTS = Path(__file__).parent
 
@@ -199,7 +199,7 @@ def test_report_shows_the_tables(smoke_local, tmp_path):
 
 
 def test_a_second_bench_in_the_same_folder_stops_at_once(tmp_path):
-    from simrig.bench.api import folder_lock
+    from simrig.benchmark.api import folder_lock
 
     out = tmp_path / "busy"
     out.mkdir()

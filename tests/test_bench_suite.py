@@ -5,9 +5,9 @@ import pytest
 from simrig.scenarios import ScenarioError, load_scenario
 from simrig.scenarios.overrides import get_setting, with_setting
 
-from simrig.bench.parameters import apply_parameter, parameter_value
-from simrig.bench.plan import BASE, make_plan
-from simrig.bench.suite import SuiteError, load_suite, suite_catalog
+from simrig.benchmark.parameters import apply_parameter, parameter_value
+from simrig.benchmark.plan import BASE, make_plan
+from simrig.benchmark.suite import SuiteError, load_suite, suite_catalog
 
 
 def _suite(tmp_path, text: str, name: str = "mine"):

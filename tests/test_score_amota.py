@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from peer_scorers import motmetrics_module
 
-from simrig.score.amota import RECALL_LEVELS, amota_family
-from simrig.score.bev import bev_sequence
-from simrig.score.clear3d import accumulate, clear_counts
+from simrig.scoring.amota import RECALL_LEVELS, amota_family
+from simrig.scoring.bev import bev_sequence
+from simrig.scoring.clear3d import accumulate, clear_counts
 
 
 def sequence(gt, tracks, frames=None):
@@ -163,8 +163,8 @@ def test_generated_dataset_3d_matching_equals_motmetrics(small_dataset):
     """The class sequences of a generated dataset (class ranges applied), scored against its ground truth moved
     by 0.8 m noise with misses and an id change, equal py-motmetrics' accumulator on the same rows."""
     from simrig.dataset.tracks_file import TrackRows
-    from simrig.score.ground_truth import load_ground_truth
-    from simrig.score.inputs import class_sequences
+    from simrig.scoring.ground_truth import load_ground_truth
+    from simrig.scoring.inputs import class_sequences
 
     mm = motmetrics_module()
     truth = load_ground_truth(small_dataset)

@@ -6,7 +6,7 @@ from simrig.trackers import register
 from simrig.cli import main
 from simrig.errors import TracksError
 from simrig.pipeline.track import run_tracker
-from simrig.score import score
+from simrig.scoring import score
 
 
 def test_one_camera_scores_as_that_camera_does_in_the_full_report(small_dataset, tmp_path):

@@ -5,14 +5,14 @@ import pytest
 from peer_scorers import flatten, motmetrics_module, random_scene, trackeval_data, trackeval_metrics
 
 from simrig.dataset.tracks_file import TrackRows
-from simrig.score.clear import CLEAR
-from simrig.score.counts import sum_counts
-from simrig.score.ground_truth import load_ground_truth
-from simrig.score.hota import HOTA
-from simrig.score.identity import Identity
-from simrig.score.inputs import camera_sequences
-from simrig.score.ratios import clear_ratios, hota_ratios, identity_ratios
-from simrig.score.sequence import sequence_from_rows
+from simrig.scoring.clear import CLEAR
+from simrig.scoring.counts import sum_counts
+from simrig.scoring.ground_truth import load_ground_truth
+from simrig.scoring.hota import HOTA
+from simrig.scoring.identity import Identity
+from simrig.scoring.inputs import camera_sequences
+from simrig.scoring.ratios import clear_ratios, hota_ratios, identity_ratios
+from simrig.scoring.sequence import sequence_from_rows
 
 COMPARED = ("HOTA", "DetA", "AssA", "LocA", "DetRe", "DetPr", "AssRe", "AssPr", "MOTA", "MOTP", "IDSW", "Frag",
             "MT", "PT", "ML", "CLR_TP", "CLR_FN", "CLR_FP", "IDF1", "IDP", "IDR")

@@ -10,8 +10,8 @@ import pytest
 from simrig.cli import main
 from simrig.dataset.tracks_file import TRACKS2D_SCHEMA, TRACKS3D_SCHEMA
 from simrig.errors import TracksError
-from simrig.score import read_tracks, score, write_tracks
-from simrig.score.ground_truth import load_ground_truth
+from simrig.scoring import read_tracks, score, write_tracks
+from simrig.scoring.ground_truth import load_ground_truth
 from simrig.types import ActorClass, Box2D, Box3D, Track
 
 CAMERAS = ("CAM_A", "CAM_B")

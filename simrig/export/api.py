@@ -10,8 +10,8 @@ from simrig.dataset.tracks_file import TrackRows, TrackSet, read_tracks
 
 from ..dataset import Dataset
 from ..errors import SimrigError
-from ..score.ground_truth import GroundTruth, load_ground_truth
-from ..score.inputs import project_tracks
+from ..scoring.ground_truth import GroundTruth, load_ground_truth
+from ..scoring.inputs import project_tracks
 
 
 class ExportError(SimrigError):

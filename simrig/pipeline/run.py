@@ -15,7 +15,7 @@ from simrig.dataset import Dataset
 from simrig.pipeline.generate import generate
 from simrig.pipeline.track import TrackingRun, build_tracker, run_tracker
 from simrig.scenarios import Scenario, load_scenario
-from simrig.score import ScoreReport, score
+from simrig.scoring import ScoreReport, score
 
 
 @dataclass(frozen=True)

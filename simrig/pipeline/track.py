@@ -25,7 +25,7 @@ class TrackingError(SimrigError):
 
 @dataclass(frozen=True, eq=False)
 class TrackingRun:
-    """A tracker's output (``tracks``, validated, ready for :func:`simrig.score.score`), where it was written
+    """A tracker's output (``tracks``, validated, ready for :func:`simrig.scoring.score`), where it was written
     (``out``, None when it was kept in memory only) and how long the tracker's ``step`` calls took in total
     [s] (reading the dataset and writing the tracks excluded)."""
 

@@ -6,8 +6,8 @@ import shlex
 import shutil
 from pathlib import Path
 
-from ..bench.api import BENCH_FILE
-from ..bench.results import CAUSES, RESULTS
+from ..benchmark.api import BENCH_FILE
+from ..benchmark.results import CAUSES, RESULTS
 from .curves import curve_table, plot_sweep, plot_sweep_by_scenario
 from .groups import groups
 from .load import BenchResults, load_bench

@@ -15,7 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from ..bench.results import PARAMETER_PREFIX  # noqa: E402
+from ..benchmark.results import PARAMETER_PREFIX  # noqa: E402
 from .groups import Group  # noqa: E402
 from .load import BenchResults  # noqa: E402
 from .markdown import table  # noqa: E402

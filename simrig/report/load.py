@@ -9,9 +9,9 @@ from pathlib import Path
 import pandas as pd
 import pyarrow.parquet as pq
 
-from ..bench.api import BENCH_FILE
-from ..bench.results import CAUSES, RESULTS
-from ..bench.suite import TrackerEntry
+from ..benchmark.api import BENCH_FILE
+from ..benchmark.results import CAUSES, RESULTS
+from ..benchmark.suite import TrackerEntry
 from ..errors import SimrigError
 
 

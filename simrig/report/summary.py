@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from ..score.attribution import ATTRIBUTION_CAUSES
+from ..scoring.attribution import ATTRIBUTION_CAUSES
 from .groups import COUNT_COLUMNS, Group
 from .load import BenchResults
 from .markdown import number, table

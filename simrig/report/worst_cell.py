@@ -24,7 +24,7 @@ from simrig.scenarios import Scenario
 
 from ..dataset import Dataset
 from ..errors import DatasetError
-from ..score import score
+from ..scoring import score
 from .groups import group_of
 from .load import BenchResults, ReportError
 

@@ -19,7 +19,7 @@ from pydantic import ValidationError
 from simrig.scenarios.schema import Scenario
 
 from ..errors import SimrigError
-from ..score import ScoreReport
+from ..scoring import ScoreReport
 
 
 class ReplayError(SimrigError):
@@ -122,7 +122,7 @@ def replay(path: Path | str, *, tracker: str | None = None, params: dict | None 
     from simrig.pipeline.generate import generate
     from simrig.pipeline.track import run_tracker
 
-    from ..score import score
+    from ..scoring import score
 
     loaded = load_replay(path)
     name = tracker or loaded.tracker

@@ -18,7 +18,7 @@ from simrig.pipeline.track import run_tracker as run_on_dataset
 from simrig.scenarios.schema import Scenario
 
 from ..dataset import Dataset
-from ..score import ScoreReport, score
+from ..scoring import ScoreReport, score
 
 Scores = ScoreReport
 """What :func:`run_tracker` returns: the full score report (``.metrics3d``, ``.metrics2d``, ``.errors``)."""

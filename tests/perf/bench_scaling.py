@@ -22,10 +22,10 @@ from pathlib import Path
 
 from published import command_line, machine, publish  # tests/perf helpers
 
-from simrig.bench import load_suite, run_bench
-from simrig.bench.evaluate import evaluate
-from simrig.bench.plan import make_plan
-from simrig.bench.results import finished
+from simrig.benchmark import load_suite, run_bench
+from simrig.benchmark.evaluate import evaluate
+from simrig.benchmark.plan import make_plan
+from simrig.benchmark.results import finished
 
 SIDES = (("local", 1), ("local", 2), ("ray", 2), ("ray", 1))
 

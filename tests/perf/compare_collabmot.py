@@ -24,7 +24,7 @@ from published import cached_dataset, command_line, machine, publish  # tests/pe
 from simrig.scenarios import load_scenario
 
 from simrig.pipeline.track import run_tracker
-from simrig.score import score
+from simrig.scoring import score
 
 SCENARIOS = ("stereo_occluder", "stereo_occluder_narrow", "stereo_one_sided", "stereo_one_sided_narrow")
 SINGLE = ("sort", "deepsort")

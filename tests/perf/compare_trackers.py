@@ -22,7 +22,7 @@ from published import cached_dataset, command_line, machine, publish  # tests/pe
 from simrig.scenarios import load_scenario
 
 from simrig.pipeline.track import run_tracker
-from simrig.score import score
+from simrig.scoring import score
 
 TRACKERS = ("saga", "global_hungarian", "percam_merge", "simpletrack",
             "saga:duplicate_iou=0", "global_hungarian:duplicate_iou=0.3")

@@ -9,7 +9,7 @@ Run explicitly (not part of the test suite)::
    actor). simrig: building its sequences (IoU included) and counting; TrackEval 1.3.0: building its per-frame
    ``data`` (its own IoU) and ``eval_sequence`` + ``combine_sequences`` of its three metric classes.
 2. 3D — the AMOTA family of one class on a synthetic highway with ``--boxes`` ground-truth boxes (a tracker
-   with 0.5 m noise, misses, id swaps, false positives). simrig: :func:`simrig.score.amota.amota_family`;
+   with 0.5 m noise, misses, id swaps, false positives). simrig: :func:`simrig.scoring.amota.amota_family`;
    the nuScenes devkit (1.2.0): ``TrackingEvaluation.accumulate`` on ``TrackingBox`` objects built beforehand
    (not timed), plus the few lines of ``TrackingEval.evaluate`` that pick the best threshold and average.
    The devkit pins numpy < 2, so it is installed in the benchmark's own environment without dependencies::
@@ -44,16 +44,16 @@ from simrig.scenarios import load_scenario  # noqa: E402
 from simrig.dataset import Dataset  # noqa: E402
 from simrig.dataset.tracks_file import TrackRows  # noqa: E402
 from simrig.pipeline.generate import generate  # noqa: E402
-from simrig.score.amota import amota_family  # noqa: E402
-from simrig.score.bev import bev_sequence  # noqa: E402
-from simrig.score.clear import CLEAR  # noqa: E402
-from simrig.score.counts import sum_counts  # noqa: E402
-from simrig.score.ground_truth import load_ground_truth  # noqa: E402
-from simrig.score.hota import HOTA  # noqa: E402
-from simrig.score.identity import Identity  # noqa: E402
-from simrig.score.inputs import camera_sequences  # noqa: E402
-from simrig.score.ratios import clear_ratios, hota_ratios, identity_ratios  # noqa: E402
-from simrig.score.sequence import frame_slices  # noqa: E402
+from simrig.scoring.amota import amota_family  # noqa: E402
+from simrig.scoring.bev import bev_sequence  # noqa: E402
+from simrig.scoring.clear import CLEAR  # noqa: E402
+from simrig.scoring.counts import sum_counts  # noqa: E402
+from simrig.scoring.ground_truth import load_ground_truth  # noqa: E402
+from simrig.scoring.hota import HOTA  # noqa: E402
+from simrig.scoring.identity import Identity  # noqa: E402
+from simrig.scoring.inputs import camera_sequences  # noqa: E402
+from simrig.scoring.ratios import clear_ratios, hota_ratios, identity_ratios  # noqa: E402
+from simrig.scoring.sequence import frame_slices  # noqa: E402
 
 REPORT = Path(__file__).resolve().parents[2] / "reports" / "perf" / "score.md"
 COMPARED_2D = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDSW", "Frag", "IDF1")

@@ -20,7 +20,7 @@ paths relative to the suite file. Example::
     rigs = ["stereo"]                 # runs only on scenarios with these rig presets
 
     [[sweeps]]
-    parameter = "miss_probability"    # an alias (simrig.bench.parameters) or a dotted scenario path
+    parameter = "miss_probability"    # an alias (simrig.benchmark.parameters) or a dotted scenario path
     values = [0.05, 0.2, 0.35, 0.5]
     [[sweeps]]
     parameter = "rig.overlap_deg"
@@ -42,15 +42,19 @@ from typing import Annotated, Any
 from pydantic import Field, ValidationError, model_validator
 
 from simrig.pipeline.track import TrackingError, build_tracker
-from simrig.scenarios import CATALOG_DIR, Scenario, ScenarioError, describe_errors, load_scenario
+from simrig.scenarios import (
+    Scenario,
+    ScenarioError,
+    describe_errors,
+    load_scenario,
+    suite_catalog,
+)
 from simrig.scenarios.base import Strict
 from simrig.scenarios.schema import RIG_PRESETS
 
 from ..errors import SimrigError
 from ..rig import build_rig
 from .parameters import ALIASES, apply_parameter, parameter_value
-
-SUITES_DIR = CATALOG_DIR / "suites"
 
 
 class SuiteError(SimrigError):
@@ -131,11 +135,6 @@ class Suite(Strict):
     def sweep_scenarios(self, sweep: Sweep) -> tuple[str, ...]:
         """The scenario references a sweep applies to."""
         return sweep.scenarios or self.scenarios
-
-
-def suite_catalog() -> dict[str, Path]:
-    """Named suites by name."""
-    return {path.stem: path for path in sorted(SUITES_DIR.glob("*.toml"))}
 
 
 def _path(name_or_path: str | Path) -> Path:

@@ -1,5 +1,5 @@
 """Counts: what a metric unit returns for one sequence. Counts add up across sequences, cameras and classes;
-every ratio is computed from the summed counts, once, in :mod:`simrig.score.ratios`."""
+every ratio is computed from the summed counts, once, in :mod:`simrig.scoring.ratios`."""
 
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ per-frame ground truth (no interpolation of either side).
    at each score. 40 recall levels ``linspace(0.1, 1, 40)``: a level's score threshold is interpolated from
    those scores; a level above the highest recall reached is not reached.
 2. At each distinct threshold, keep tracker boxes whose track score ≥ it and count CLEAR events
-   (:mod:`simrig.score.clear3d`).
+   (:mod:`simrig.scoring.clear3d`).
 3. MOTAR_r = max(0, 1 − (IDS + FP + FN − (1 − r)·P) / (r·P)) with P the ground-truth boxes and r = TP/P the
    measured recall (TP counts MATCH events, not switches, as the devkit does; algebraically this is
    max(0, 1 − FP/TP)). AMOTA = mean of MOTAR_r over the 40 levels (0 where unreached); AMOTP = mean of

@@ -8,7 +8,7 @@ import numpy as np
 import pyarrow as pa
 
 from simrig.dataset.tracks_file import TrackSet, read_tracks
-from simrig.score.results import COUNT_METRICS, METRICS_2D, METRICS_3D, ScoreReport
+from simrig.scoring.results import COUNT_METRICS, METRICS_2D, METRICS_3D, ScoreReport
 
 from ..dataset import Dataset
 from ..errors import TracksError

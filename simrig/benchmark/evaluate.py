@@ -12,11 +12,11 @@ from dataclasses import dataclass
 
 from simrig.pipeline.cache import cached_dataset
 from simrig.pipeline.track import run_tracker
-from simrig.score.results import METRICS_2D, METRICS_3D
+from simrig.scoring.results import METRICS_2D, METRICS_3D
 
 from ..errors import SimrigError
-from ..score import ScoreReport, score
-from ..score.attribution import errors_by_cause
+from ..scoring import ScoreReport, score
+from ..scoring.attribution import errors_by_cause
 from .plan import Job
 
 METRIC_COLUMNS = (*(f"3d_{name}" for name in METRICS_3D), *(f"2d_{name}" for name in METRICS_2D))

@@ -6,7 +6,7 @@ causes the dataset recorded.
 """
 
 from simrig.dataset.tracks_file import TrackSet, read_tracks, write_tracks
-from simrig.score.results import ScoreReport
+from simrig.scoring.results import ScoreReport
 
 from .api import score
 

@@ -16,7 +16,6 @@ from ..errors import SimrigError
 from .evaluate import Outcome, evaluate
 from .plan import Job
 
-ENGINES = ("local", "ray")
 Finished = tuple[Job, list[Outcome], float]
 
 

@@ -12,7 +12,8 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..dataset.manifest import write_json_atomic
-from .engines import ENGINES, local_engine, machine_workers, ray_engine
+from .engine_names import ENGINES
+from .engines import local_engine, machine_workers, ray_engine
 from .evaluate import BenchError
 from .plan import Plan, make_plan
 from .results import TABLES, assemble, finished, write_fragment, write_table_atomic

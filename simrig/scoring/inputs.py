@@ -1,11 +1,11 @@
 """From a dataset's ground truth and a tracker's rows to the sequences the metrics read.
 
-2D: one :class:`~simrig.score.sequence.Sequence` per (camera, class). Ground truth: every actor in the
+2D: one :class:`~simrig.scoring.sequence.Sequence` per (camera, class). Ground truth: every actor in the
 camera's view (its clipped silhouette box). Tracker boxes: the tracker's own 2D rows, or — for a 3D-only
 tracker — its 3D boxes projected through the rig with the ground truth's geometry (boxes clipped to the near
 plane and the image, kept where in view), so that 3D and 2D trackers are compared on the same camera.
 
-3D: one :class:`~simrig.score.bev.BevSequence` per class. Ground truth and tracker boxes count only closer to
+3D: one :class:`~simrig.scoring.bev.BevSequence` per class. Ground truth and tracker boxes count only closer to
 the ego than the class range (strict, BEV): :data:`CLASS_RANGE_M`. A track's score is the mean of its
 per-frame scores over its boxes in range (nuScenes).
 """

@@ -11,7 +11,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from simrig.score.attribution import errors_by_cause
+from simrig.scoring.attribution import errors_by_cause
 
 METRICS_3D = ("AMOTA", "AMOTP", "MOTAR", "MOTA", "MOTP", "RECALL", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN",
               "ATVE", "TVE")
@@ -28,7 +28,7 @@ class ScoreReport:
 
     metrics3d: ``{"overall": {...}, "per_class": {class: {...}}}`` or ``None`` (no 3D tracks).
     metrics2d: ``{"overall": ..., "per_class": ..., "per_camera": ...}`` and ``source`` (``tracks2d`` or
-    ``projected 3D tracks``). errors: one row per error (:data:`~simrig.score.attribution.ERRORS_SCHEMA`).
+    ``projected 3D tracks``). errors: one row per error (:data:`~simrig.scoring.attribution.ERRORS_SCHEMA`).
     """
 
     dataset: str

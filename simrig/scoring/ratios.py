@@ -14,7 +14,7 @@ def _ratio(numerator, denominator):
 
 
 def hota_ratios(c: Counts) -> dict[str, float]:
-    """HOTA family from :class:`~simrig.score.hota.HOTA` counts: each value is the mean over the 19 α;
+    """HOTA family from :class:`~simrig.scoring.hota.HOTA` counts: each value is the mean over the 19 α;
     ``HOTA(0)`` and ``LocA(0)`` are the values at α = 0.05."""
     tp, fn, fp = c["HOTA_TP"], c["HOTA_FN"], c["HOTA_FP"]
     det_a = _ratio(tp, tp + fn + fp)
@@ -38,7 +38,7 @@ def hota_ratios(c: Counts) -> dict[str, float]:
 
 
 def clear_ratios(c: Counts) -> dict[str, float]:
-    """CLEAR MOT from :class:`~simrig.score.clear.CLEAR` counts. MOTP is the mean IoU of matches (higher is
+    """CLEAR MOT from :class:`~simrig.scoring.clear.CLEAR` counts. MOTP is the mean IoU of matches (higher is
     better, TrackEval's convention); MOTA is not clipped."""
     tp, fn, fp, idsw = c["CLR_TP"], c["CLR_FN"], c["CLR_FP"], c["IDSW"]
     gt_ids = c["MT"] + c["PT"] + c["ML"]
@@ -56,7 +56,7 @@ def clear_ratios(c: Counts) -> dict[str, float]:
 
 
 def identity_ratios(c: Counts) -> dict[str, float]:
-    """IDF1, IDP, IDR from :class:`~simrig.score.identity.Identity` counts."""
+    """IDF1, IDP, IDR from :class:`~simrig.scoring.identity.Identity` counts."""
     id_tp, id_fn, id_fp = c["IDTP"], c["IDFN"], c["IDFP"]
     return {
         "IDF1": float(_ratio(id_tp, id_tp + 0.5 * id_fp + 0.5 * id_fn)),
