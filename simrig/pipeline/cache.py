@@ -27,7 +27,7 @@ def dataset_key(scenario: Scenario, seed: int, frames: int | None) -> str:
     >>> dataset_key(s, 0, None) == dataset_key(s, 0, s.frames) != dataset_key(s, 1, None)
     True
     """
-    from simrig import __version__
+    from simrig.version import __version__
 
     identity = {
         "scenario": scenario.model_dump(mode="json"),
