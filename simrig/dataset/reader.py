@@ -13,6 +13,7 @@ import pyarrow.parquet as pq
 
 from ..errors import DatasetError
 from ..rig import rig_from_dict
+from ..road import RoadMarkings
 from ..types import (
     BOX2D_FIELDS,
     BOX3D_FIELDS,
@@ -102,6 +103,13 @@ class Dataset:
     def rig(self) -> Rig:
         with (self.path / self.manifest["files"]["rig"]["file"]).open(encoding="utf-8") as handle:
             return rig_from_dict(json.load(handle))
+
+    def road_markings(self) -> RoadMarkings | None:
+        """The painted lines of the dataset's road (world frame), or None if it recorded none."""
+        path = self.path / "road.json"
+        if not path.exists():
+            return None
+        return RoadMarkings.from_dict(json.loads(path.read_text(encoding="utf-8")))
 
     def table(self, name: str) -> pa.Table:
         """One of the Parquet tables (:data:`simrig.dataset.tables.SCHEMAS`: ``ego_poses``, ``ground_truth``,
