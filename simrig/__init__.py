@@ -25,7 +25,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-__version__ = "0.1.0"
+from simrig.version import __version__
 
 _EXPORTS = {
     # the steps

@@ -13,7 +13,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from simrig.pipeline.cache import dataset_key
+from simrig.pipeline.cache import dataset_key, world_key
 from simrig.scenarios import Scenario
 
 from .parameters import apply_parameter, parameter_value
@@ -78,14 +78,20 @@ class Plan:
                 for key, (scenario, _, _) in self.cells.items()}
 
     def jobs(self, finished: set[tuple[str, str]], cache: Path) -> list[Job]:
-        """The cells with trackers not yet in ``finished`` (a set of (cell, tracker key)), in plan order."""
-        out = []
+        """The cells with trackers not yet in ``finished`` (a set of (cell, tracker key)): the first cell of
+        each world (:func:`~simrig.pipeline.cache.world_key`) in plan order, then the cells that share a world
+        with an earlier one (detector sweeps), so that by the time those start their world is likely in the
+        cache and only the sensor model runs. Results are written in plan order whatever the run order."""
+        first, later, worlds = [], [], set()
         for key, pairs in self.work().items():
             pending = tuple(pair for pair in pairs if (key, pair[0]) not in finished)
+            scenario, seed, frames = self.cells[key]
+            world = world_key(scenario, seed, frames)
             if pending:
-                scenario, seed, frames = self.cells[key]
-                out.append(Job(key, scenario, seed, frames, cache, pending, self.suite.frame_time_limit_s))
-        return out
+                (later if world in worlds else first).append(Job(key, scenario, seed, frames, cache, pending,
+                                                                    self.suite.frame_time_limit_s))
+            worlds.add(world)
+        return first + later
 
 
 def make_plan(suite: Suite, scenarios: dict[str, Scenario]) -> Plan:

@@ -14,6 +14,7 @@ import pyarrow.parquet as pq
 
 from ..errors import DatasetError
 from ..rig import rig_from_dict
+from ..road import RoadMarkings
 from ..types import (
     BOX2D_FIELDS,
     BOX3D_FIELDS,
@@ -129,6 +130,13 @@ class Dataset:
     @cached_property
     def rig(self) -> Rig:
         return rig_from_dict(json.loads(self._read_file("rig")))
+
+    def road_markings(self) -> RoadMarkings | None:
+        """The painted lines of the dataset's road (world frame), or None if it recorded none."""
+        path = self.path / "road.json"
+        if not path.exists():
+            return None
+        return RoadMarkings.from_dict(json.loads(path.read_text(encoding="utf-8")))
 
     def table(self, name: str) -> pa.Table:
         """One of the Parquet tables (:data:`simrig.dataset.tables.SCHEMAS`: ``ego_poses``, ``ground_truth``,

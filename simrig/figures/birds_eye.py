@@ -14,7 +14,7 @@ import pyarrow as pa  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
 from simrig.dataset import Dataset  # noqa: E402
-from simrig.figures.mosaic import identity_colour, road_markings  # noqa: E402
+from simrig.figures.mosaic import identity_colour  # noqa: E402
 from simrig.road import dash_segments  # noqa: E402
 
 MARGIN_M = 10.0
@@ -48,7 +48,7 @@ def plot_bev(dataset: Dataset, tracks3d: pa.Table | None, switches: list[tuple[i
     width = 16.0
     height = float(np.clip(width * span[1] / span[0], 3.5, 12.0)) if equal else 5.0
     figure, axis = plt.subplots(figsize=(width, height + 0.8), dpi=100)
-    markings = road_markings(dataset)
+    markings = dataset.road_markings()
     if markings is not None:
         segments = [dash_segments(line, dashed) for line, dashed in zip(markings.lines, markings.dashed, strict=True)]
         axis.add_collection(LineCollection(np.concatenate(segments), colors="0.8", linewidths=0.6))

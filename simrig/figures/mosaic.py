@@ -9,7 +9,6 @@ false positives).
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import matplotlib
@@ -24,7 +23,7 @@ from matplotlib.patches import Polygon, Rectangle  # noqa: E402
 from simrig.dataset import Dataset  # noqa: E402
 from simrig.errors import DatasetError  # noqa: E402
 from simrig.geometry import box_corners  # noqa: E402
-from simrig.road import RoadMarkings, dash_segments  # noqa: E402
+from simrig.road import dash_segments  # noqa: E402
 from simrig.types import GroundTruthFrame  # noqa: E402
 
 SURROUND_LAYOUT = (("CAM_FRONT_LEFT", "CAM_FRONT", "CAM_FRONT_RIGHT"), ("CAM_BACK_LEFT", "CAM_BACK", "CAM_BACK_RIGHT"))
@@ -55,17 +54,9 @@ def _camera_images(dataset: Dataset, state: GroundTruthFrame) -> dict[str, np.nd
         return {name: np.asarray(Image.open(images / name / f"{state.frame:06d}.png")) for name in names}
     from simrig.render.scene import RigScene
 
-    scene = RigScene(road_markings(dataset))
+    scene = RigScene(dataset.road_markings())
     scene.set_frame(state.ego, state.classes, state.boxes)
     return {camera.name: scene.colour(camera, dataset.rig, state.ego) for camera in dataset.rig.cameras}
-
-
-def road_markings(dataset: Dataset) -> RoadMarkings | None:
-    """The painted lines of the dataset's road (world frame), or None if it recorded none."""
-    path = dataset.path / "road.json"
-    if not path.exists():
-        return None
-    return RoadMarkings.from_dict(json.loads(path.read_text(encoding="utf-8")))
 
 
 def _detections(dataset: Dataset, frame: int) -> dict[str, list[tuple[np.ndarray, np.ndarray, int]]]:
@@ -95,7 +86,7 @@ def _draw_bev(axis, dataset: Dataset, state: GroundTruthFrame, detections) -> No
     def to_ego(points: np.ndarray) -> np.ndarray:
         return (points - [ego.x, ego.y]) @ rotation.T
 
-    markings = road_markings(dataset)
+    markings = dataset.road_markings()
     if markings is not None:
         segments = [to_ego(dash_segments(line, dashed).reshape(-1, 2)).reshape(-1, 2, 2)
                     for line, dashed in zip(markings.lines, markings.dashed, strict=True)]

@@ -10,18 +10,21 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 from tqdm import tqdm
 
-from simrig.dataset import DatasetWriter, check_output_folder
+from simrig.dataset import Dataset, DatasetWriter, check_output_folder
 from simrig.dataset.manifest import IMAGES_FOLDER, package_versions
 from simrig.dataset.tables import frame_columns
-from simrig.geometry import project_boxes
+from simrig.errors import DatasetError
+from simrig.geometry import Projection, project_boxes
 from simrig.render.visibility import Visibility
 from simrig.rig import build_rig, rig_to_dict
 from simrig.scenarios import Scenario
 from simrig.scenarios.perturbation_schema import WORLD_KINDS
 from simrig.seeding import RandomStreams
 from simrig.sensor.model import SensorModel
+from simrig.types import GroundTruthFrame
 from simrig.world import TrafficWorld
 
 
@@ -56,61 +59,49 @@ def generate(
     overwrite: bool = False,
     images: bool = False,
     progress: bool = False,
+    world_from: Dataset | None = None,
 ) -> GenerateResult:
     """Generate the dataset of ``scenario`` with ``seed`` into ``out``; ``frames`` defaults to the scenario's.
 
     ``images`` also writes a PNG per camera and frame at the image resolution. Same scenario, seed and
     frame count give byte-identical files. Raises :class:`~simrig.errors.DatasetExistsError` if ``out``
-    holds a complete dataset and ``overwrite`` is false, and :class:`~scenarios.ScenarioError` for a
+    holds a complete dataset and ``overwrite`` is false, and :class:`~simrig.scenarios.ScenarioError` for a
     perturbation naming a camera the rig lacks (both checked before any simulation work).
+
+    ``world_from``: a dataset of the same world (same :func:`~simrig.pipeline.cache.world_key`: traffic, rig,
+    rendering, world perturbations, seed and frames; only the detector's settings and sensor perturbations may
+    differ). Its traffic and measured visibility are reused and only the sensor model runs — the files are
+    byte-identical to a full generation, in a fraction of the time (no simulation, no rendering).
     """
+    from simrig.pipeline.cache import world_key
+
     frames = scenario.frames if frames is None else frames
     if not isinstance(frames, int) or frames < 1:
         raise ValueError(f"frames: must be a positive integer, got {frames!r}")
     out = Path(out)
+    if world_from is not None:
+        if images:
+            raise ValueError("images: cannot be written when the world is reused (world_from); generate in full")
+        if world_from.manifest.get("world_key") != world_key(scenario, seed, frames):
+            raise DatasetError(f"{world_from.path}: not the same world as {scenario.name!r} seed {seed}, "
+                               f"{frames} frames (traffic, rig, rendering or world perturbations differ)")
     check_output_folder(out, overwrite=overwrite)
     streams = RandomStreams(seed)
     rig = build_rig(scenario.rig)
     sensor = SensorModel(scenario, rig, streams)
     times = StageTimes()
     started = time.perf_counter()
-    world = TrafficWorld(
-        scenario.traffic,
-        scenario.frame_rate_hz,
-        env_seed=streams.integer_seed("traffic"),
-        rng=streams.generator("population"),
-        scripted=tuple((i, p) for i, p in enumerate(scenario.perturbations) if p.kind in WORLD_KINDS),
-    )
-    scene = meter = None
+    world = (_SimulatedWorld(scenario, rig, streams, images) if world_from is None
+             else _RecordedWorld(world_from, rig))
     events: list[dict] = []
     try:
         with DatasetWriter(out, overwrite=overwrite) as writer:
             writer.write_json("rig.json", rig_to_dict(rig))
             for frame in tqdm(range(frames), desc=scenario.name, unit="frame", disable=not progress):
-                tick = time.perf_counter()
-                state = world.reset() if frame == 0 else world.step()
+                state, projection, visibility = world.frame(frame, times)
                 events.extend({"frame": state.frame, "event": name} for name in state.events)
-                if frame == 0:
-                    markings = world.road_markings()
-                    writer.write_json("road.json", markings.to_dict())
-                    if scenario.render.visibility or images:
-                        from simrig.render.meter import VisibilityMeter
-                        from simrig.render.scene import RigScene
-
-                        scene = RigScene(markings)
-                        meter = VisibilityMeter(rig, scenario.render.visibility_scale, scene)
-                times.traffic += time.perf_counter() - tick
-
-                tick = time.perf_counter()
-                projection = project_boxes(state.boxes, rig, state.ego)
-                times.projection += time.perf_counter() - tick
-
-                tick = time.perf_counter()
-                if scenario.render.visibility:
-                    visibility = meter.measure(state, projection)
-                else:
-                    visibility = Visibility.unmeasured(projection)
-                times.visibility += time.perf_counter() - tick
+                if frame == 0 and world.markings is not None:
+                    writer.write_json("road.json", world.markings.to_dict())
 
                 tick = time.perf_counter()
                 output = sensor.observe(state, projection, visibility)
@@ -118,6 +109,7 @@ def generate(
 
                 if images:
                     tick = time.perf_counter()
+                    scene = world.scene
                     scene.set_frame(state.ego, state.classes, state.boxes)
                     for camera in rig.cameras:
                         writer.write_image(
@@ -138,6 +130,7 @@ def generate(
                     "visibility": "rendered" if scenario.render.visibility else "not measured",
                     "versions": package_versions(),
                     "events": events,
+                    "world_key": world_key(scenario, seed, frames),
                 }
             )
             times.writing += time.perf_counter() - tick
@@ -145,3 +138,89 @@ def generate(
         world.close()
     times.total = time.perf_counter() - started
     return GenerateResult(path=out, manifest=manifest, times=times)
+
+
+class _SimulatedWorld:
+    """The world of a full generation: highway-env traffic, analytic projection, rendered visibility."""
+
+    def __init__(self, scenario: Scenario, rig, streams: RandomStreams, images: bool):
+        self.scenario, self.rig, self.images = scenario, rig, images
+        self.traffic = TrafficWorld(
+            scenario.traffic,
+            scenario.frame_rate_hz,
+            env_seed=streams.integer_seed("traffic"),
+            rng=streams.generator("population"),
+            scripted=tuple((i, p) for i, p in enumerate(scenario.perturbations) if p.kind in WORLD_KINDS),
+        )
+        self.markings = self.scene = self.meter = None
+
+    def frame(self, frame: int, times: StageTimes) -> tuple[GroundTruthFrame, Projection, Visibility]:
+        tick = time.perf_counter()
+        state = self.traffic.reset() if frame == 0 else self.traffic.step()
+        if frame == 0:
+            self.markings = self.traffic.road_markings()
+            if self.scenario.render.visibility or self.images:
+                from simrig.render.meter import VisibilityMeter
+                from simrig.render.scene import RigScene
+
+                self.scene = RigScene(self.markings)
+                self.meter = VisibilityMeter(self.rig, self.scenario.render.visibility_scale, self.scene)
+        times.traffic += time.perf_counter() - tick
+
+        tick = time.perf_counter()
+        projection = project_boxes(state.boxes, self.rig, state.ego)
+        times.projection += time.perf_counter() - tick
+
+        tick = time.perf_counter()
+        if self.scenario.render.visibility:
+            visibility = self.meter.measure(state, projection)
+        else:
+            visibility = Visibility.unmeasured(projection)
+        times.visibility += time.perf_counter() - tick
+        return state, projection, visibility
+
+    def close(self) -> None:
+        self.traffic.close()
+
+
+class _RecordedWorld:
+    """The world of an existing dataset: its ground truth and measured visibility, the projection recomputed
+    (it is a pure function of the boxes, cheaper than reading it back) — what the sensor model needs, no
+    simulation and no rendering. The frame's world events come from the dataset's manifest."""
+
+    def __init__(self, dataset: Dataset, rig):
+        self.rig = rig
+        self.markings = dataset.road_markings()
+        self._states = dataset.ground_truth_frames()
+        table = dataset.table("visibility")
+        self._frames = table.column("frame").to_numpy()
+        self._visible = table.column("visible_px").to_numpy().astype(np.int64)
+        self._silhouette = table.column("silhouette_px").to_numpy().astype(np.int64)
+        self._rendered = dataset.manifest.get("visibility") == "rendered"
+        self._events: dict[int, list[str]] = {}
+        for event in dataset.manifest.get("events", []):
+            self._events.setdefault(int(event["frame"]), []).append(event["event"])
+
+    def frame(self, frame: int, times: StageTimes) -> tuple[GroundTruthFrame, Projection, Visibility]:
+        tick = time.perf_counter()
+        recorded = next(self._states)
+        state = GroundTruthFrame(frame=recorded.frame, timestamp=recorded.timestamp, ego=recorded.ego,
+                                 actor_ids=recorded.actor_ids, classes=recorded.classes, boxes=recorded.boxes,
+                                 events=tuple(self._events.get(recorded.frame, ())))
+        times.traffic += time.perf_counter() - tick
+        tick = time.perf_counter()
+        projection = project_boxes(state.boxes, self.rig, state.ego)
+        times.projection += time.perf_counter() - tick
+        tick = time.perf_counter()
+        if self._rendered:
+            lo, hi = np.searchsorted(self._frames, [frame, frame + 1])
+            shape = (len(state.actor_ids), len(self.rig.cameras))
+            visibility = Visibility.from_counts(self._visible[lo:hi].reshape(shape).T,
+                                                self._silhouette[lo:hi].reshape(shape).T)
+        else:
+            visibility = Visibility.unmeasured(projection)
+        times.visibility += time.perf_counter() - tick
+        return state, projection, visibility
+
+    def close(self) -> None:
+        pass

@@ -8,7 +8,7 @@ actor's silhouette is the union of its parts' hulls. Pixels are counted at the c
 — the points OpenGL samples — inside the image, so the count matches what the renderer would draw for the
 actor alone, up to the pixels whose centre lies exactly on an edge.
 
-Why not the alternatives measured in ``shared/notes/simulation.md``: the hull of the whole vehicle
+Why not the alternatives measured for the README's "Visibility" section: the hull of the whole vehicle
 overestimates a car-shaped silhouette by ~21 %, and rendering each actor alone costs 3–8 ms per actor
 and camera (0.2–0.4 s per frame for 40 vehicles and six cameras, over the frame budget). Rasterising two
 hulls over the actor's bounding box costs ~0.1 ms for a typical actor.

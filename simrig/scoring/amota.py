@@ -1,5 +1,5 @@
 """The nuScenes tracking metrics of one class (AMOTA, AMOTP, MOTAR, MOTA, MOTP, RECALL, IDS, FRAG, MT, ML, TP,
-FP, FN) and MUTR3D's velocity errors (ATVE, TVE; Eq. 11 of seed 004), following the devkit's algorithm on exact
+FP, FN) and MUTR3D's velocity errors (ATVE, TVE; Eq. 11 of "MUTR3D: A Multi-camera Tracking Framework via 3D-to-2D Queries", Zhang et al., 2022), following the devkit's algorithm on exact
 per-frame ground truth (no interpolation of either side).
 
 1. Match with every tracker box kept; the track scores of the MATCH events, sorted, give the recall reached

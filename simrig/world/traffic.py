@@ -1,6 +1,6 @@
 """highway-env as simrig's traffic source: an IDM-driven ego inside steady traffic, exact 3D ground truth.
 
-What this module adds to highway-env (see ``shared/notes/simulation.md`` for the measured facts):
+What this module adds to highway-env (the README's "What simrig does with highway-env, and why" has the measured facts):
 
 * The ego drives itself (IDM + MOBIL, like every other vehicle), so no agent action ends an episode. The
   scenario always runs all its frames: a crash of the ego or the end of highway-env's episode is recorded

@@ -1,0 +1,118 @@
+"""No module imports from a layer above its own (README, "Layers"): read every import of every module.
+
+Imports inside functions count too: a lazy import is still a dependency.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+FOLDERS = {"simrig": ROOT / "simrig", "simrig.trackers": ROOT / "tracker", "simrig.scenarios": ROOT / "scenarios"}
+
+# Bottom to top. A module belongs to the first layer one of whose prefixes it starts with.
+LAYERS: dict[str, tuple[str, ...]] = {
+    "records": ("simrig.types", "simrig.errors", "simrig.seeding", "simrig.classes", "simrig.causes",
+                "simrig.road", "simrig.version", "simrig.lifeline"),
+    "scenarios": ("simrig.scenarios",),
+    "geometry": ("simrig.geometry", "simrig.rig"),
+    "trackers": ("simrig.trackers",),
+    "making data": ("simrig.world", "simrig.render", "simrig.sensor"),
+    "storage": ("simrig.dataset", "simrig.export"),
+    "judging": ("simrig.scoring",),
+    "pipeline": ("simrig.pipeline",),
+    "orchestration": ("simrig.benchmark", "simrig.testing"),
+    "faces": ("simrig.report", "simrig.figures", "simrig.cli", "simrig.api", "simrig.__main__", "simrig"),
+}
+BELOW_DATA = ("records", "scenarios", "geometry")
+ALLOWED: dict[str, set[str]] = {
+    "records": {"records"},
+    "scenarios": {"records", "scenarios"},
+    "geometry": {"records", "scenarios", "geometry"},  # a rig is built from its validated settings
+    "trackers": {"records", "geometry", "trackers"},  # never the world, renderer, sensor, dataset or scorer
+    "making data": {*BELOW_DATA, "making data"},
+    "storage": {*BELOW_DATA, "making data", "storage"},
+    "judging": {*BELOW_DATA, "making data", "storage", "judging"},  # never a tracker: each is a black box
+    "pipeline": set(LAYERS) - {"orchestration", "faces"},
+    "orchestration": set(LAYERS) - {"faces"},
+    "faces": set(LAYERS),
+}
+
+
+def layer_of(module: str) -> str | None:
+    best = None
+    for layer, prefixes in LAYERS.items():
+        for prefix in prefixes:
+            if (module == prefix or module.startswith(prefix + ".")) and (best is None or len(prefix) > best[1]):
+                best = (layer, len(prefix))
+    return best[0] if best else None
+
+
+def modules() -> dict[str, Path]:
+    """Every module of the installed package by its import name."""
+    out = {}
+    for package, folder in FOLDERS.items():
+        for path in folder.rglob("*.py"):
+            parts = path.relative_to(folder).with_suffix("").parts
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            out[".".join((package, *parts))] = path
+    return out
+
+
+def imported(module: str, path: Path) -> set[str]:
+    """The simrig modules that ``module`` imports (absolute and relative, at any depth of the file)."""
+    is_package = path.name == "__init__.py"
+    package = module if is_package else module.rpartition(".")[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            found.add(target)
+            found.update(f"{target}.{alias.name}" for alias in node.names)  # "from . import x" names a module
+    known = modules()
+    return {name for name in found if name in known}
+
+
+def test_every_module_has_a_layer() -> None:
+    assert [name for name in modules() if layer_of(name) is None] == []
+
+
+# Being removed by the change that gives export its own ground-truth reader and track projection (issue 17).
+_KNOWN_UNTIL_MERGE = {("simrig.export.api", "simrig.scoring.ground_truth"),
+                      ("simrig.export.api", "simrig.scoring.inputs")}
+
+
+def test_no_module_imports_from_a_layer_above_its_own() -> None:
+    found = modules()
+    upward = []
+    for module, path in sorted(found.items()):
+        mine = layer_of(module)
+        for target in sorted(imported(module, path)):
+            if layer_of(target) not in ALLOWED[mine] and (module, target) not in _KNOWN_UNTIL_MERGE:
+                upward.append(f"{module} ({mine}) imports {target} ({layer_of(target)})")
+    assert upward == []
+
+
+@pytest.mark.parametrize(("module", "layer"), [
+    ("simrig.types", "records"), ("simrig.trackers.saga", "trackers"), ("simrig.scoring.hota", "judging"),
+    ("simrig", "faces"), ("simrig.scenarios.schema", "scenarios"), ("simrig.pipeline.run", "pipeline"),
+])
+def test_layer_of(module: str, layer: str) -> None:
+    assert layer_of(module) == layer
+
+
+def test_the_checker_sees_relative_and_function_level_imports(tmp_path: Path) -> None:
+    source = tmp_path / "probe.py"
+    source.write_text("def f():\n    from ..scoring import hota\n    from simrig.pipeline import run\n")
+    assert imported("simrig.sensor.probe", source) >= {"simrig.scoring", "simrig.scoring.hota", "simrig.pipeline.run"}
