@@ -8,11 +8,11 @@ import pytest
 import trackeval
 
 from simrig.cli import main
+from simrig.dataset.ground_truth import load_ground_truth
 from simrig.export import api as export_api
 from simrig.export import export
 from simrig.pipeline.track import run_tracker
 from simrig.score import score
-from simrig.score.ground_truth import load_ground_truth
 
 
 def trackeval_on(out, tracker_name):

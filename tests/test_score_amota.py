@@ -162,8 +162,8 @@ def test_renaming_track_ids_changes_nothing():
 def test_generated_dataset_3d_matching_equals_motmetrics(small_dataset):
     """The class sequences of a generated dataset (class ranges applied), scored against its ground truth moved
     by 0.8 m noise with misses and an id change, equal py-motmetrics' accumulator on the same rows."""
+    from simrig.dataset.ground_truth import load_ground_truth
     from simrig.dataset.tracks_file import TrackRows
-    from simrig.score.ground_truth import load_ground_truth
     from simrig.score.inputs import class_sequences
 
     mm = motmetrics_module()

@@ -6,9 +6,9 @@ from simrig.scenarios import load_scenario
 
 from simrig.causes import Cause
 from simrig.dataset import Dataset
+from simrig.dataset.ground_truth import load_ground_truth
 from simrig.pipeline.generate import generate
 from simrig.score import score, write_tracks
-from simrig.score.ground_truth import load_ground_truth
 from simrig.types import ActorClass, Box3D, Track
 
 OCCLUDED_FRAMES = range(10, 30)

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from peer_scorers import flatten, motmetrics_module, random_scene, trackeval_data, trackeval_metrics
 
+from simrig.dataset.ground_truth import load_ground_truth
 from simrig.dataset.tracks_file import TrackRows
 from simrig.score.clear import CLEAR
 from simrig.score.counts import sum_counts
-from simrig.score.ground_truth import load_ground_truth
 from simrig.score.hota import HOTA
 from simrig.score.identity import Identity
 from simrig.score.inputs import camera_sequences

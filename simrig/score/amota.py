@@ -9,7 +9,9 @@ per-frame ground truth (no interpolation of either side).
    (:mod:`simrig.score.clear3d`).
 3. MOTAR_r = max(0, 1 − (IDS + FP + FN − (1 − r)·P) / (r·P)) with P the ground-truth boxes and r = TP/P the
    measured recall (TP counts MATCH events, not switches, as the devkit does; algebraically this is
-   max(0, 1 − FP/TP)). AMOTA = mean of MOTAR_r over the 40 levels (0 where unreached); AMOTP = mean of
+   max(0, 1 − FP/TP)). A class with ground truth that reaches no level gets the devkit's worst values
+   (``metric_worst``: MOTAR 0, MOTA 0, MOTP 2 m, RECALL 0), so it lowers the overall mean.
+   AMOTA = mean of MOTAR_r over the 40 levels (0 where unreached); AMOTP = mean of
    MOTP_r [m] (2 m where unreached). ATVE = mean over the reached levels of the mean velocity error [m/s] of
    matched pairs (no worst value is defined for it; NaN when no level is reached).
 4. MOTA (clipped at 0), MOTP, RECALL (matches incl. switches / P), IDS, FRAG, MT, ML, TP, FP, FN and TVE are
@@ -116,7 +118,9 @@ def amota_family(seq: BevSequence) -> AmotaResult:
     metrics["ATVE"] = float(np.mean(velocity)) if velocity else float("nan")
     if not reached:
         gt_tracks = int(len(np.unique(seq.gt_id)))
-        metrics.update(MOTA=0.0, MOTP=WORST_MOTP_M, RECALL=0.0, TP=0, MT=0, ML=gt_tracks, FN=seq.num_gt_dets)
+        # The devkit's metric_worst for a class with ground truth that reaches no recall level.
+        metrics.update(MOTAR=0.0, MOTA=0.0, MOTP=WORST_MOTP_M, RECALL=0.0, TP=0, MT=0, ML=gt_tracks,
+                       FN=seq.num_gt_dets)
         return AmotaResult(metrics, tuple(levels), None, float("nan"))
     # Levels run from the lowest recall up; the devkit lists them from the highest down and takes the first
     # maximum, so ties go to the highest recall.
