@@ -116,9 +116,11 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
 
 def _cmd_score(args: argparse.Namespace) -> int:
+    from .dataset.evaluation import evaluation_overrides
     from .score import score
 
-    report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera)
+    report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera,
+                   evaluation=evaluation_overrides(args.evaluation))
     print(report.table())
     if args.json is not None:
         report.write_json(args.json)
@@ -267,6 +269,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="[s] an ID switch is also tagged with the causes this long before it (default 1)")
     scorer.add_argument("--camera", default=None, metavar="NAME",
                         help="score only this camera, in 2D (e.g. a stereo pair's ego camera 'left')")
+    scorer.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                        help="an [evaluation] key on top of the dataset's (e.g. min_height_px=40, range_m.car=60, "
+                             "ignore=false, classes=any); repeatable")
     scorer.set_defaults(run=_cmd_score)
 
     replay = commands.add_parser("replay", help="rerun a replay file (a failing test's scenario) and compare")

@@ -8,10 +8,17 @@ from __future__ import annotations
 import enum
 
 import numpy as np
+from pydantic import ValidationError
 
+from simrig.scenarios import describe_errors
 from simrig.scenarios.evaluation_schema import EvaluationConfig
 
+from ..errors import SimrigError
 from .ground_truth import GroundTruth
+
+
+class EvaluationError(SimrigError):
+    """Evaluation settings that are not valid; the message names the key (and the file when one set it)."""
 
 
 class IgnoreRule(enum.IntFlag):
@@ -34,10 +41,35 @@ IGNORE_RULE_NAMES: tuple[str, ...] = tuple(rule.name.lower() for rule in IgnoreR
 def evaluation_of(scenario: dict, override: EvaluationConfig | dict | None = None) -> EvaluationConfig:
     """The evaluation settings of a dataset's resolved ``scenario`` (its ``evaluation`` table; the defaults for
     a dataset written before the table existed), with ``override``'s keys on top (validated again)."""
-    base = dict(scenario.get("evaluation") or {})
     if isinstance(override, EvaluationConfig):
         return override
-    return EvaluationConfig.model_validate({**base, **(override or {})})
+    base = dict(scenario.get("evaluation") or {})
+    try:
+        return EvaluationConfig.model_validate({**base, **(override or {})})
+    except ValidationError as error:
+        where = f"{', '.join(f'{k}={v!r}' for k, v in (override or {}).items())} on top of " if override else ""
+        raise EvaluationError(f"evaluation settings ({where}scenario {scenario.get('name')!r}'s [evaluation]): "
+                              f"{describe_errors(error)}") from None
+
+
+def evaluation_overrides(pairs: list[tuple[str, object]] | None) -> dict:
+    """``[evaluation]`` keys from ``KEY=VALUE`` pairs (``simrig score --evaluation``); a dotted key sets one
+    entry of a table (``range_m.car=60``).
+
+    >>> evaluation_overrides([("min_height_px", 40), ("range_m.car", 60)])
+    {'min_height_px': 40, 'range_m': {'car': 60}}
+    """
+    out: dict = {}
+    for key, value in pairs or []:
+        head, _, entry = key.partition(".")
+        if entry:
+            table = out.setdefault(head, {})
+            if not isinstance(table, dict):
+                raise EvaluationError(f"--evaluation {key}: {head} is set as a number too")
+            table[entry] = value
+        else:
+            out[key] = value
+    return out
 
 
 def ignore_rules(truth: GroundTruth, config: EvaluationConfig) -> np.ndarray:

@@ -26,6 +26,7 @@ import numpy as np
 
 from .bev import BevSequence
 from .clear3d import Accumulation, ClearCounts3D, accumulate, clear_counts
+from .results import COUNT_METRICS
 
 RECALL_LEVELS = np.linspace(0.1, 1.0, 40).round(12)
 """The 40 recall levels r of AMOTA (the devkit's ``min_recall`` 0.1 to 1)."""
@@ -130,3 +131,26 @@ def amota_family(seq: BevSequence) -> AmotaResult:
                     ("MOTAR", "MOTA", "MOTP", "RECALL", "TVE", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN")})
     best_threshold = reached[best].threshold
     return AmotaResult(metrics, tuple(levels), cache[best_threshold][0], best_threshold)
+
+
+def combine_classes(per_class: dict[str, dict[str, float]], names: tuple[str, ...] | None = None
+                    ) -> dict[str, float]:
+    """Overall 3D metrics from per-class ones, the devkit's rule by name: counts summed over the classes (0 when
+    nothing was scored), every other metric the mean over the classes where it is defined (NaN when none is:
+    no class has ground truth). A class with ground truth and no reached recall level has MOTAR 0, so it counts.
+    ``names``: the metrics to combine (default: those of the classes).
+
+    >>> combine_classes({"car": {"MOTAR": 1.0, "IDS": 2}, "truck": {"MOTAR": 0.0, "IDS": 1}})
+    {'MOTAR': 0.5, 'IDS': 3.0}
+    """
+    if names is None:
+        names = tuple(dict.fromkeys(name for values in per_class.values() for name in values))
+    overall = {}
+    for name in names:
+        values = np.array([values[name] for values in per_class.values()], dtype=float).reshape(-1)
+        present = values[~np.isnan(values)]
+        if name in COUNT_METRICS:
+            overall[name] = float(present.sum())
+        else:
+            overall[name] = float(present.mean()) if len(present) else float("nan")
+    return overall

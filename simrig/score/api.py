@@ -6,18 +6,16 @@ from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
-from pydantic import ValidationError
 
 from simrig.dataset.tracks_file import TrackSet, read_tracks
-from simrig.scenarios import describe_errors
 from simrig.scenarios.evaluation_schema import EvaluationConfig
-from simrig.score.results import COUNT_METRICS, METRICS_2D, METRICS_3D, ScoreReport
+from simrig.score.results import METRICS_2D, METRICS_3D, ScoreReport
 
 from ..dataset import Dataset
 from ..dataset.evaluation import evaluation_of, ignore_rules, ignored_counts
 from ..dataset.ground_truth import GroundTruth, project_tracks
 from ..errors import TracksError
-from .amota import amota_family
+from .amota import amota_family, combine_classes
 from .attribution import ERRORS_SCHEMA, Attributor
 from .bev import BevSequence
 from .clear import CLEAR, ClearEvents
@@ -53,7 +51,7 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     if camera is not None and camera not in dataset.rig.camera_names:
         raise TracksError(f"--camera {camera!r}: the dataset's rig {dataset.rig.name!r} has cameras "
                           f"{', '.join(dataset.rig.camera_names)}")
-    config = _evaluation(dataset, evaluation)
+    config = evaluation_of(dataset.scenario, evaluation)
     truth = dataset.ground_truth if truth is None else truth
     if not isinstance(tracks, TrackSet):
         tracks = read_tracks(tracks, frame_count=len(truth.frames), cameras=truth.rig.camera_names)
@@ -81,13 +79,6 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     )
 
 
-def _evaluation(dataset: Dataset, evaluation: EvaluationConfig | dict | None) -> EvaluationConfig:
-    try:
-        return evaluation_of(dataset.scenario, evaluation)
-    except ValidationError as error:
-        raise TracksError(f"evaluation settings of {dataset.path}: {describe_errors(error)}") from None
-
-
 def _score_3d(truth: GroundTruth, tracks: TrackSet, lookback: int) -> tuple[dict, pa.Table]:
     attributor = Attributor(truth, truth.miss_causes_3d, lookback)
     per_class, errors = {}, []
@@ -96,14 +87,7 @@ def _score_3d(truth: GroundTruth, tracks: TrackSet, lookback: int) -> tuple[dict
         per_class[seq.label] = {name: result.metrics[name] for name in METRICS_3D}
         if result.best is not None or seq.num_gt_dets:
             errors.append(attributor.tag(seq.label, "", "3d", events_3d(seq, result.best)))
-    overall = {}
-    for name in METRICS_3D:
-        values = np.array([values[name] for values in per_class.values()], dtype=float)
-        present = values[~np.isnan(values)]
-        if name in COUNT_METRICS:  # summed over classes (0 when nothing was scored)
-            overall[name] = float(present.sum())
-        else:  # the mean over the classes where it is defined (NaN when none: no ground truth)
-            overall[name] = float(present.mean()) if len(present) else float("nan")
+    overall = combine_classes(per_class, METRICS_3D)
     return {"overall": overall, "per_class": per_class}, _concat(errors)
 
 
