@@ -67,7 +67,7 @@ def test_trackeval_on_the_motchallenge_export_equals_simrig_score(small_dataset,
     run = run_tracker(small_dataset, tracker_name, tmp_path / tracker_name)
     out = export(small_dataset, "motchallenge", tmp_path / "mot", tracks=run.out)
     report = score(small_dataset, run.out)
-    assert report.metrics2d["ignored"]["overall"]["ignored"] > 0
+    assert report.metrics2d["ground_truth"]["overall"]["ignored"] > 0
     assert_equal_to_trackeval(report, trackeval_on(out, tracker_name))
 
 
@@ -109,18 +109,27 @@ def test_trackeval_equals_simrig_with_tracker_boxes_on_ignored_boxes(small_datas
     assert_equal_to_trackeval(report, trackeval_on(out, "hand"))
 
 
-def test_kitti_labels_hold_every_box_in_view_with_the_projected_depth(small_dataset, tmp_path):
+def test_kitti_labels_hold_every_box_in_view_with_the_projected_depth_and_dont_care(small_dataset, tmp_path):
     out = export(small_dataset, "kitti", tmp_path / "kitti")
     truth = load_ground_truth(small_dataset)
     projections = small_dataset.table("projections").to_pylist()
     depth = {(p["frame"], p["actor_id"], p["camera"]): p["depth"] for p in projections}
+    from simrig.dataset.evaluation import evaluation_of, ignore_rules
+
+    rules = ignore_rules(truth, evaluation_of(small_dataset.scenario))
+    truncation = {(p["frame"], p["actor_id"], p["camera"]): p["truncation"] for p in projections}
     for c, camera in enumerate(truth.rig.camera_names):
         lines = (out / camera / "label_02" / "0000.txt").read_text().splitlines()
         assert len(lines) == int(truth.in_view[:, c].sum())
-        for line in lines[:20]:
+        dont_care = [line.split() for line in lines if line.split()[2] == "DontCare"]
+        assert len(dont_care) == int(np.count_nonzero(rules[:, c]))  # ignored ground truth: KITTI's DontCare
+        assert all(f[1] == "-1" for f in dont_care)
+        for line in [line for line in lines if "DontCare" not in line][:20]:
             f = line.split()
             frame, actor = int(f[0]), int(f[1])
             row = np.nonzero((truth.frame == frame) & (truth.actor_id == actor))[0][0]
+            fraction = truncation[(frame, actor, camera)]
+            assert int(f[3]) == (0 if fraction <= 1e-9 else 1 if fraction <= 0.5 else 2)
             assert [float(v) for v in f[6:10]] == pytest.approx(truth.boxes2d[row, c], abs=1e-3)
             assert float(f[15]) == pytest.approx(depth[(frame, actor, camera)], abs=1e-3)  # level cameras: z of centre
             assert [float(v) for v in f[10:13]] == pytest.approx(truth.boxes[row, [5, 4, 3]], abs=1e-3)  # h, w, l

@@ -111,12 +111,13 @@ def test_score_reports_ignored_boxes_per_camera_and_an_ignored_causes_line(small
 
     run = run_tracker(small_dataset, "sort", tmp_path / "sort")
     report = score(small_dataset, run.out)
-    ignored = report.metrics2d["ignored"]
+    ignored = report.metrics2d["ground_truth"]
     truth = small_dataset.ground_truth
     rules = ignore_rules(truth, EvaluationConfig())
     for c, camera in enumerate(truth.rig.camera_names):
+        delivered = int(np.sum(truth.in_view[:, c] & truth.detected[:, c] & (rules[:, c] == 0)))
         assert ignored["per_camera"][camera] == {"boxes": int(truth.in_view[:, c].sum()),
-                                                 **ignored_counts(rules[:, c])}
+                                                 **ignored_counts(rules[:, c]), "delivered": delivered}
     assert ignored["overall"]["ignored"] == sum(v["ignored"] for v in ignored["per_camera"].values()) > 0
     kinds = report.errors.column("kind").to_pylist()
     causes = report.errors.column("causes").to_pylist()
@@ -126,7 +127,7 @@ def test_score_reports_ignored_boxes_per_camera_and_an_ignored_causes_line(small
     assert "2D ground truth ignored" in text and "ignored (not errors)" in text
     assert report.settings["evaluation"]["min_height_px"] == 25.0
     everything = score(small_dataset, run.out, evaluation={"ignore": False})
-    assert everything.metrics2d["ignored"]["overall"]["ignored"] == 0
+    assert everything.metrics2d["ground_truth"]["overall"]["ignored"] == 0
     assert "IGN" not in everything.errors.column("kind").to_pylist()
 
 

@@ -105,7 +105,7 @@ def test_perfect_tracker_scores_one_and_nothing_is_dropped(small_dataset, tmp_pa
     assert (overall2d["HOTA"], overall2d["MOTA"], overall2d["IDF1"], overall2d["IDSW"]) == (1.0, 1.0, 1.0, 0)
     assert set(report.errors.column("kind").to_pylist()) <= {"IGN"}  # no error; nothing left untracked either
     assert report.errors.num_rows == 0
-    ignored = report.metrics2d["ignored"]["overall"]
+    ignored = report.metrics2d["ground_truth"]["overall"]
     assert 0 < ignored["ignored"] < ignored["boxes"] == int(truth.in_view.sum())
     assert overall2d["CLR_TP"] + overall2d["CLR_FP"] + ignored["ignored"] == int(truth.in_view.sum())
     everything = score(small_dataset, tmp_path / "perfect", evaluation={"ignore": False}).metrics2d["overall"]

@@ -96,7 +96,7 @@ CAMERA_METRICS = ("HOTA", "AssA", "IDF1", "MOTA", "IDSW", "Frag", "CLR_TP", "CLR
 
 def camera_values(report: ScoreReport) -> dict[str, dict[str, float]]:
     """Per scored camera: :data:`CAMERA_METRICS` and how many ground-truth boxes were in view and ignored."""
-    ignored = report.metrics2d.get("ignored", {}).get("per_camera", {})
+    ignored = report.metrics2d.get("ground_truth", {}).get("per_camera", {})
     return {camera: {**{name: float(values[name]) for name in CAMERA_METRICS},
                      "boxes": float(ignored.get(camera, {}).get("boxes", math.nan)),
                      "ignored": float(ignored.get(camera, {}).get("ignored", math.nan))}

@@ -142,18 +142,21 @@ def _score_2d(truth: GroundTruth, rows2d, lookback: int, camera: str | None,
         values = combine(UNITS_2D, selected)
         return {name: values[name] for name in METRICS_2D}
 
-    in_view = truth.in_view[:, [cameras.index(name) for name in scored]]
-    scored_rules = rules[:, [cameras.index(name) for name in scored]]
+    columns = [cameras.index(name) for name in scored]
+    in_view, scored_rules = truth.in_view[:, columns], rules[:, columns]
+    delivered = in_view & truth.detected[:, columns] & (scored_rules == 0)
+
+    def accounting(i: slice | int) -> dict:
+        return {"boxes": int(in_view[:, i].sum()), **ignored_counts(scored_rules[:, i]),
+                "delivered": int(delivered[:, i].sum())}
+
     return {
         "overall": metrics([p for _, _, p in parts]),
         "per_camera": {name: metrics([p for cam, _, p in parts if cam == name]) for name in scored},
         "per_class": {label: metrics([p for _, lab, p in parts if lab == label])
                       for label in sorted({lab for _, lab, _ in parts})},
-        "ignored": {
-            "overall": {"boxes": int(in_view.sum()), **ignored_counts(scored_rules)},
-            "per_camera": {name: {"boxes": int(in_view[:, i].sum()), **ignored_counts(scored_rules[:, i])}
-                           for i, name in enumerate(scored)},
-        },
+        "ground_truth": {"overall": accounting(slice(None)),
+                         "per_camera": {name: accounting(i) for i, name in enumerate(scored)}},
     }, _concat(errors)
 
 

@@ -19,8 +19,9 @@ METRICS_3D = ("AMOTA", "AMOTP", "MOTAR", "MOTA", "MOTP", "RECALL", "IDS", "FRAG"
 METRICS_2D = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDSW", "Frag", "MT", "PT", "ML", "IDF1", "IDP",
               "IDR", "CLR_TP", "CLR_FN", "CLR_FP")
 """2D metrics, TrackEval style (MOTP: mean IoU of matches)."""
-IGNORED_COLUMNS = ("boxes", "ignored", "range", "height", "visibility", "truncation")
-"""Per camera: ground-truth boxes in view, how many are ignored, and by each rule (a box may break several)."""
+IGNORED_COLUMNS = ("boxes", "ignored", "range", "height", "visibility", "truncation", "delivered")
+"""Per camera: ground-truth boxes in view, how many are ignored, and by each rule (a box may break several);
+``delivered``: the scored (not ignored) boxes the camera's detector reported."""
 COUNT_METRICS = {"IDS", "FRAG", "MT", "ML", "TP", "FP", "FN", "IDSW", "Frag", "PT", "CLR_TP", "CLR_FN", "CLR_FP"}
 
 
@@ -29,8 +30,9 @@ class ScoreReport:
     """Scores of one tracker output on one dataset.
 
     metrics3d: ``{"overall": {...}, "per_class": {class: {...}}}`` or ``None`` (no 3D tracks).
-    metrics2d: ``{"overall": ..., "per_class": ..., "per_camera": ...}``, ``ignored`` (``overall`` and
-    ``per_camera``: boxes in view, ignored, and ignored by each rule) and ``source`` (``tracks2d`` or
+    metrics2d: ``{"overall": ..., "per_class": ..., "per_camera": ...}``, ``ground_truth`` (``overall`` and
+    ``per_camera``: boxes in view, ignored, ignored by each rule, and ``delivered``: scored boxes the detector
+    reported) and ``source`` (``tracks2d`` or
     ``projected 3D tracks``). errors: one row per error (:data:`~simrig.score.attribution.ERRORS_SCHEMA`).
     """
 
@@ -68,10 +70,12 @@ class ScoreReport:
         rows = {"overall": self.metrics2d["overall"], **self.metrics2d["per_camera"],
                 **{f"class {name}": value for name, value in self.metrics2d["per_class"].items()}}
         lines += _grid(METRICS_2D, rows)
-        ignored = self.metrics2d.get("ignored")
-        if ignored is not None:
-            lines += ["", f"2D ground truth ignored (not scored: {_evaluation_text(self.settings.get('evaluation'))})"]
-            lines += _grid(IGNORED_COLUMNS, {"overall": ignored["overall"], **ignored["per_camera"]})
+        truth = self.metrics2d.get("ground_truth")
+        if truth is not None:
+            lines += ["", "2D ground truth: boxes in view; ignored, and by which rule (not scored: "
+                      f"{_evaluation_text(self.settings.get('evaluation'))}); delivered: scored boxes the "
+                      "detector reported"]
+            lines += _grid(IGNORED_COLUMNS, {"overall": truth["overall"], **truth["per_camera"]})
         for dimension, table in errors_by_cause(self.errors).items():
             lines += ["", f"{dimension.upper()} errors by cause (an error with several causes counts in each)"]
             lines.append(f"  {'cause':<22}{'FN':>8}{'IDS':>8}{'FRAG':>8}")
