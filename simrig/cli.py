@@ -108,9 +108,11 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
+    from .dataset.evaluation import evaluation_overrides
     from .export import export
 
-    out = export(args.dataset, args.format, args.out, tracks=args.tracks, overwrite=args.overwrite)
+    out = export(args.dataset, args.format, args.out, tracks=args.tracks, overwrite=args.overwrite,
+                 evaluation=evaluation_overrides(args.evaluation))
     print(f"wrote {out} ({args.format})")
     return 0
 
@@ -288,6 +290,8 @@ def build_parser() -> argparse.ArgumentParser:
     exporter.add_argument("--tracks", type=Path, default=None, help="a tracks folder or file to export too")
     exporter.add_argument("--out", type=Path, required=True, help="folder to write (must not exist)")
     exporter.add_argument("--overwrite", action="store_true", help="replace OUT if it exists")
+    exporter.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                          help="an [evaluation] key, as for score: the ignored ground truth is written as distractors")
     exporter.set_defaults(run=_cmd_export)
 
     track = commands.add_parser("track", help="run a registered tracker over a dataset and write its tracks")
