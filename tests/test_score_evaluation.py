@@ -147,3 +147,22 @@ def test_bad_evaluation_settings_are_one_line_naming_the_key_and_file(tmp_path, 
     code = main(["score", str(small_dataset.path), str(tracks), "--evaluation", "min_height_px=-3"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and err.startswith("simrig: error:") and "min_height_px" in err and "\n" not in err
+
+
+def test_ground_truth_is_read_once_per_dataset_for_several_trackers(small_dataset, tmp_path, monkeypatch):
+    """Scoring two trackers on one opened dataset reads its ground truth once; a caller holding it passes it."""
+    from simrig.dataset import Dataset
+    from simrig.dataset import ground_truth as module
+    from simrig.pipeline.track import run_tracker
+    from simrig.score import score
+
+    runs = [run_tracker(small_dataset, name, tmp_path / name).out for name in ("sort", "saga")]
+    reads = []
+    real = module.load_ground_truth
+    monkeypatch.setattr(module, "load_ground_truth", lambda dataset: reads.append(dataset) or real(dataset))
+    dataset = Dataset.open(small_dataset.path)
+    first, second = (score(dataset, out) for out in runs)
+    assert len(reads) == 1
+    held = score(Dataset.open(small_dataset.path), runs[1], truth=dataset.ground_truth)
+    assert len(reads) == 1 and held.metrics2d["overall"] == second.metrics2d["overall"]
+    assert first.metrics2d["overall"] != second.metrics2d["overall"]
