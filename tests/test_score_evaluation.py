@@ -124,7 +124,7 @@ def test_score_reports_ignored_boxes_per_camera_and_an_ignored_causes_line(small
     ign = [c for k, c in zip(kinds, causes, strict=True) if k == "IGN"]
     assert ign and all(any(tag.startswith("ignored_") for tag in tags) for tags in ign)
     text = report.table()
-    assert "2D ground truth ignored" in text and "ignored (not errors)" in text
+    assert "2D ground truth: boxes in view; ignored" in text and "ignored (not errors)" in text
     assert report.settings["evaluation"]["min_height_px"] == 25.0
     everything = score(small_dataset, run.out, evaluation={"ignore": False})
     assert everything.metrics2d["ground_truth"]["overall"]["ignored"] == 0
