@@ -108,17 +108,21 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
+    from .dataset.evaluation import evaluation_overrides
     from .export import export
 
-    out = export(args.dataset, args.format, args.out, tracks=args.tracks, overwrite=args.overwrite)
+    out = export(args.dataset, args.format, args.out, tracks=args.tracks, overwrite=args.overwrite,
+                 evaluation=evaluation_overrides(args.evaluation))
     print(f"wrote {out} ({args.format})")
     return 0
 
 
 def _cmd_score(args: argparse.Namespace) -> int:
+    from .dataset.evaluation import evaluation_overrides
     from .scoring import score
 
-    report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera)
+    report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera,
+                   evaluation=evaluation_overrides(args.evaluation))
     print(report.table())
     if args.json is not None:
         report.write_json(args.json)
@@ -267,6 +271,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="[s] an ID switch is also tagged with the causes this long before it (default 1)")
     scorer.add_argument("--camera", default=None, metavar="NAME",
                         help="score only this camera, in 2D (e.g. a stereo pair's ego camera 'left')")
+    scorer.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                        help="an [evaluation] key on top of the dataset's (e.g. min_height_px=40, range_m.car=60, "
+                             "ignore=false, classes=any); repeatable")
     scorer.set_defaults(run=_cmd_score)
 
     replay = commands.add_parser("replay", help="rerun a replay file (a failing test's scenario) and compare")
@@ -283,6 +290,8 @@ def build_parser() -> argparse.ArgumentParser:
     exporter.add_argument("--tracks", type=Path, default=None, help="a tracks folder or file to export too")
     exporter.add_argument("--out", type=Path, required=True, help="folder to write (must not exist)")
     exporter.add_argument("--overwrite", action="store_true", help="replace OUT if it exists")
+    exporter.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                          help="an [evaluation] key, as for score: the ignored ground truth is written as distractors")
     exporter.set_defaults(run=_cmd_export)
 
     track = commands.add_parser("track", help="run a registered tracker over a dataset and write its tracks")

@@ -25,6 +25,7 @@ from ..types import (
     Rig,
     SensorFrame,
 )
+from .ground_truth import GroundTruth
 from .manifest import MANIFEST_NAME, file_sha256, folder_digest, read_manifest
 from .tables import SCHEMAS
 
@@ -140,50 +141,39 @@ class Dataset:
             for row, frame in enumerate(columns["frame"])
         ]
 
+    @cached_property
+    def ground_truth(self) -> GroundTruth:
+        """The whole ground truth as flat arrays (:class:`~simrig.dataset.ground_truth.GroundTruth`), read once
+        per :class:`Dataset` object by the one ground-truth reader."""
+        from .ground_truth import load_ground_truth
+
+        return load_ground_truth(self)
+
     def ground_truth_frames(self) -> Iterator[GroundTruthFrame]:
-        """Every frame's :class:`GroundTruthFrame`, in order, with per-camera projections."""
-        truth = self.table("ground_truth")
-        frames = truth.column("frame").to_numpy()
-        ids = truth.column("actor_id").to_numpy()
-        classes = np.asarray(truth.column("class").to_pylist(), dtype=object)
-        boxes = _stack(truth, BOX3D_FIELDS)
-        projections = self.table("projections")
-        proj_frames = projections.column("frame").to_numpy()
-        proj_boxes = _stack(projections, BOX2D_FIELDS)
-        truncation = projections.column("truncation").to_numpy()
-        depth = projections.column("depth").to_numpy()
-        in_view = projections.column("in_view").to_numpy(zero_copy_only=False)
-        occlusion = self.table("visibility").column("occlusion").to_numpy()
-        events = self.table("frames").column("events").to_pylist()
-        names = self.rig.camera_names
-        c = len(names)
-        for row, (frame, timestamp, pose) in enumerate(self._ego_rows()):
-            lo, hi = np.searchsorted(frames, [frame, frame + 1])
-            plo, phi = np.searchsorted(proj_frames, [frame, frame + 1])
-            n = hi - lo
-            if phi - plo != n * c:
-                raise DatasetError(
-                    f"{self.path}: frame {frame} has {n} actors but {phi - plo} projection rows ({c} cameras)"
-                )
+        """Every frame's :class:`GroundTruthFrame`, in order, with per-camera projections: views on
+        :attr:`ground_truth`."""
+        truth = self.ground_truth
+        for position, frame in enumerate(truth.frames):
+            rows = truth.frame_rows(position)
             per_camera = {
                 name: CameraGroundTruth(
-                    boxes=proj_boxes[plo:phi][index::c],
-                    truncation=truncation[plo:phi][index::c],
-                    depth=depth[plo:phi][index::c],
-                    in_view=in_view[plo:phi][index::c],
-                    occlusion=occlusion[plo:phi][index::c],
+                    boxes=truth.boxes2d[rows, index],
+                    truncation=truth.truncation[rows, index],
+                    depth=truth.depth[rows, index],
+                    in_view=truth.in_view[rows, index],
+                    occlusion=truth.occlusion[rows, index],
                 )
-                for index, name in enumerate(names)
+                for index, name in enumerate(truth.rig.camera_names)
             }
             yield GroundTruthFrame(
-                frame=frame,
-                timestamp=timestamp,
-                ego=pose,
-                actor_ids=ids[lo:hi],
-                classes=classes[lo:hi],
-                boxes=boxes[lo:hi],
+                frame=int(frame),
+                timestamp=float(truth.timestamps[position]),
+                ego=truth.egos[position],
+                actor_ids=truth.actor_id[rows],
+                classes=truth.label[rows],
+                boxes=truth.boxes[rows],
                 cameras=per_camera,
-                events=tuple(events[row]),
+                events=truth.events[position],
             )
 
     def sensor_frames(self) -> Iterator[SensorFrame]:
