@@ -19,8 +19,8 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")  # headless: must precede the 
 
 import numpy as np  # noqa: E402
 
-if not hasattr(np, "infty"):  # pyrender 0.1.45 still uses np.infty, removed in numpy 2
-    np.inf = np.inf
+if "infty" not in np.__dict__:  # pyrender 0.1.45 still uses np.infty (scene bounds), removed in numpy 2
+    np.infty = np.inf  # noqa: NPY201  (without the noqa, ruff --fix rewrites this line into a no-op)
 
 import pyrender  # noqa: E402
 import trimesh  # noqa: E402
