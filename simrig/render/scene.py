@@ -113,17 +113,21 @@ class RigScene:
             pose[:2, 3] = -self._ego_xy
             self.scene.set_pose(self._road_node, pose)
 
-    def _place_nodes(self) -> None:
-        """Move the node pools to the frame's poses (colour renders draw the nodes; unused ones are parked)."""
+    def _place_nodes(self) -> list[pyrender.Node]:
+        """Move the node pools to the frame's poses (colour renders draw the nodes; unused ones are parked);
+        returns the actors' nodes in :meth:`set_frame` order."""
         used = dict.fromkeys(ActorClass, 0)
+        nodes = []
         for actor_class, pose in zip(self._classes, self._poses, strict=True):
             node = self._node(actor_class, used[actor_class])
             used[actor_class] += 1
             self.scene.set_pose(node, pose)
+            nodes.append(node)
         for actor_class, pool in self._pools.items():
             for node in pool[used[actor_class]:]:
                 self.scene.set_pose(node, _parked())
         self._nodes_stale = False
+        return nodes
 
     def _actor_pose(self, box: np.ndarray) -> np.ndarray:
         """Node pose: the unit mesh scaled to the box, rotated by yaw, at the centre relative to the ego."""
