@@ -52,8 +52,10 @@ SPAWN_MAX_BRAKING_MPS2 = VEHICLE_TYPES[ActorClass.CAR].ACC_MAX
 """[m/s²] the IDM braking a new vehicle may need, or impose on the vehicle behind it: the hardest braking
 highway-env lets our vehicles do (``ACC_MAX``, 6 m/s²), so IDM can always keep the gaps it starts with.
 (A lane change's limit, 2 m/s², would hold dense scenarios to IDM's free-flow spacing: 21 of 40 vehicles.)"""
-SPAWN_SPEED_STEPS = 20
-"""[-] speeds tried for a new vehicle, from its drawn speed down to 1/20 of it (:func:`_safe_to_join`)."""
+SPAWN_MIN_SPEED_FRACTION = 0.05
+"""[-] a new vehicle starts at no less than this fraction of its drawn speed (:func:`_safe_to_join`)."""
+SPAWN_SPEED_BISECTIONS = 6
+"""[-] bisection steps for the speed a new vehicle's gap allows (to ~1.5% of its drawn speed)."""
 EGO_CLASS = ActorClass.CAR
 
 _ENV_CONFIG = {
@@ -217,7 +219,7 @@ class TrafficWorld:
         for _ in range(attempts):
             pick = int(rng.integers(len(self._lanes)))
             lane = self._lanes[pick]
-            s_ego, _ = lane.local_coordinates(ego_position)
+            s_ego = snapshot.ego_along(pick, lane, ego_position)
             u = float(rng.uniform(-1.0, 1.0))  # ahead or behind, anywhere in [min, max] along the lane
             s = s_ego + np.copysign(min_distance + abs(u) * (max_distance - min_distance), u)
             actor_class = self._classes[int(rng.choice(len(self._classes), p=self._class_weights))]
@@ -370,9 +372,16 @@ class _RoadSnapshot:
     [m/s] as arrays (highway-env frame), gathered once per frame and extended as vehicles are added."""
 
     def __init__(self, vehicles: list):
+        self._ego_along: dict[int, float] = {}
         self.vehicles = list(vehicles)
         self.positions = np.array([v.position for v in self.vehicles]).reshape(-1, 2)
         self.half_sizes = np.array([(v.LENGTH / 2.0, v.WIDTH / 2.0) for v in self.vehicles]).reshape(-1, 2)
+
+    def ego_along(self, index: int, lane, ego_position: np.ndarray) -> float:
+        """[m] the ego's longitudinal coordinate on lane ``index`` (computed once per lane and frame)."""
+        if index not in self._ego_along:
+            self._ego_along[index] = float(lane.local_coordinates(ego_position)[0])
+        return self._ego_along[index]
 
     def append(self, vehicle) -> None:
         self.vehicles.append(vehicle)
@@ -413,18 +422,27 @@ def _blocked(along: np.ndarray, same_lane: np.ndarray, vehicle_type, half_sizes:
 def _safe_to_join(vehicle, front, rear) -> bool:
     """Whether ``vehicle`` can join its lane between ``front`` and ``rear`` (either None) without IDM braking
     harder than :data:`SPAWN_MAX_BRAKING_MPS2`, for itself or for ``rear``, and at which speed (set on
-    ``vehicle``): the highest of :data:`SPAWN_SPEED_STEPS` speeds, from its drawn speed or the speed of
-    ``rear`` if that is higher (merging in at the lane's speed) down to a twentieth of that, which satisfies
-    both. Its target speed stays the drawn one. Dense traffic thus starts at the speed its gaps allow instead
-    of ramming the vehicle ahead."""
+    ``vehicle``): the highest speed, from its drawn speed or the speed of ``rear`` if that is higher (merging
+    at the lane's speed) down to :data:`SPAWN_MIN_SPEED_FRACTION` of that, at which its own IDM braking stays
+    within the limit (bisection: IDM brakes harder the faster it goes), provided ``rear`` then does too (the
+    slower the new vehicle, the harder ``rear`` brakes). Its target speed stays the drawn one."""
     drawn = vehicle.speed
     top = drawn if rear is None else max(drawn, rear.speed)
-    for speed in np.linspace(top, top / SPAWN_SPEED_STEPS, SPAWN_SPEED_STEPS):
-        vehicle.speed = float(speed)
-        if front is not None and vehicle.acceleration(vehicle, front) < -SPAWN_MAX_BRAKING_MPS2:
-            continue  # too fast for the gap ahead: try slower
-        if rear is not None and rear.acceleration(rear, vehicle) < -SPAWN_MAX_BRAKING_MPS2:
-            break  # slower only makes the vehicle behind brake harder
-        return True
-    vehicle.speed = drawn
-    return False
+
+    def front_allows(speed: float) -> bool:
+        vehicle.speed = speed
+        return front is None or vehicle.acceleration(vehicle, front) >= -SPAWN_MAX_BRAKING_MPS2
+
+    if not front_allows(top):
+        allowed, too_fast = top * SPAWN_MIN_SPEED_FRACTION, top
+        if not front_allows(allowed):
+            vehicle.speed = drawn
+            return False
+        for _ in range(SPAWN_SPEED_BISECTIONS):
+            middle = (allowed + too_fast) / 2.0
+            allowed, too_fast = (middle, too_fast) if front_allows(middle) else (allowed, middle)
+        vehicle.speed = allowed
+    if rear is not None and rear.acceleration(rear, vehicle) < -SPAWN_MAX_BRAKING_MPS2:
+        vehicle.speed = drawn
+        return False
+    return True
