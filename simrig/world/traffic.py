@@ -212,37 +212,47 @@ class TrafficWorld:
         """Place one vehicle on a random lane at a distance from the ego in [min, max]; False if no room.
 
         Room means: :data:`SPAWN_CLEARANCE_M` from every bumper in the lane, and no IDM braking harder than
-        :data:`SPAWN_MAX_BRAKING_MPS2` for the new vehicle or the one behind it (module docstring)."""
+        :data:`SPAWN_MAX_BRAKING_MPS2` for the new vehicle or the one behind it (module docstring). The
+        ``attempts`` random placements are drawn at once and their clearance checked in one numpy pass
+        (``(attempts, N)``); the first that has room is taken."""
         road = self.env.unwrapped.road
         rng = self._rng
         ego_position = self.ego.position
-        for _ in range(attempts):
-            pick = int(rng.integers(len(self._lanes)))
+        picks = rng.integers(len(self._lanes), size=attempts)
+        sides = rng.uniform(-1.0, 1.0, size=attempts)  # ahead or behind, anywhere in [min, max] along the lane
+        class_rows = rng.choice(len(self._classes), size=attempts, p=self._class_weights)
+        speeds = rng.uniform(*self.config.speed_range_mps, size=attempts)
+        destinations = rng.integers(len(self._nodes), size=attempts)
+        offsets = np.copysign(min_distance + np.abs(sides) * (max_distance - min_distance), sides)
+        candidates = []  # (attempt, position, heading) of the placements on the road and in the ring
+        for attempt, (pick, offset) in enumerate(zip(picks, offsets, strict=True)):
             lane = self._lanes[pick]
-            s_ego = snapshot.ego_along(pick, lane, ego_position)
-            u = float(rng.uniform(-1.0, 1.0))  # ahead or behind, anywhere in [min, max] along the lane
-            s = s_ego + np.copysign(min_distance + abs(u) * (max_distance - min_distance), u)
-            actor_class = self._classes[int(rng.choice(len(self._classes), p=self._class_weights))]
-            speed = float(rng.uniform(*self.config.speed_range_mps))
-            destination = self._nodes[int(rng.integers(len(self._nodes)))]
+            s = snapshot.ego_along(int(pick), lane, ego_position) + float(offset)
             if not 0.0 <= s <= lane.length:
                 continue
             position = lane.position(s, 0.0)
-            distance = float(np.hypot(*(position - ego_position)))
-            if not min_distance <= distance <= max_distance:
-                continue
-            vehicle_type = VEHICLE_TYPES[actor_class]
-            heading = lane.heading_at(s)
-            along, same_lane = _lane_offsets(position, heading, vehicle_type, snapshot.positions, snapshot.half_sizes)
-            if _blocked(along, same_lane, vehicle_type, snapshot.half_sizes):
-                continue
-            vehicle = vehicle_type(
-                road, position, heading=heading, speed=speed, target_lane_index=self._lane_indices[pick],
+            if min_distance <= float(np.hypot(*(position - ego_position))) <= max_distance:
+                candidates.append((attempt, position, lane.heading_at(s)))
+        if not candidates:
+            return False
+        attempt_of = np.array([c[0] for c in candidates])
+        types = [VEHICLE_TYPES[self._classes[class_rows[attempt]]] for attempt in attempt_of]
+        sizes = np.array([(t.LENGTH, t.WIDTH) for t in types])
+        along, same_lane = _lane_offsets(
+            np.array([c[1] for c in candidates]), np.array([c[2] for c in candidates]), sizes[:, 1],
+            snapshot.positions, snapshot.half_sizes,
+        )
+        blocked = _blocking(along, same_lane, sizes[:, 0], snapshot.half_sizes).any(axis=1)
+        for index in np.flatnonzero(~blocked):
+            attempt, position, heading = candidates[index]
+            speed = float(speeds[attempt])
+            vehicle = types[index](
+                road, position, heading=heading, speed=speed, target_lane_index=self._lane_indices[picks[attempt]],
                 target_speed=speed,
             )
-            if not _safe_to_join(vehicle, *snapshot.neighbours(along, same_lane)):
+            if not _safe_to_join(vehicle, *snapshot.neighbours(along[index], same_lane[index])):
                 continue
-            vehicle.plan_route_to(destination)
+            vehicle.plan_route_to(self._nodes[destinations[attempt]])
             vehicle.simrig_id = self._next_id
             self._next_id += 1
             road.vehicles.append(vehicle)
@@ -291,9 +301,12 @@ class TrafficWorld:
         vehicle_type = VEHICLE_TYPES[ActorClass(script.actor_class)]
         others = self._others()
         snapshot = _RoadSnapshot(others)
-        along, same_lane = _lane_offsets(position, heading, vehicle_type, snapshot.positions, snapshot.half_sizes)
-        in_way = [v for v, hit in zip(others, _blocking(along, same_lane, vehicle_type, snapshot.half_sizes),
-                                      strict=True) if hit]
+        along, same_lane = _lane_offsets(
+            position[None, :], np.array([heading]), np.array([vehicle_type.WIDTH]), snapshot.positions,
+            snapshot.half_sizes,
+        )
+        hits = _blocking(along, same_lane, np.array([vehicle_type.LENGTH]), snapshot.half_sizes)[0]
+        in_way = [v for v, hit in zip(others, hits, strict=True) if hit]
         road.vehicles = [v for v in road.vehicles if v not in in_way]
         speed = self.ego.target_speed + script.relative_speed_mps
         vehicle = vehicle_type(
@@ -398,25 +411,23 @@ class _RoadSnapshot:
         return front, rear
 
 
-def _lane_offsets(position, heading, vehicle_type, positions: np.ndarray, half_sizes: np.ndarray):
-    """Signed distance [m] along the heading [rad] of a vehicle placed at ``position`` (highway-env frame) to
-    each vehicle at ``positions`` ``(M, 2)``, and whether that vehicle overlaps its lane (lateral distance under
-    the two half widths + 0.5 m, so neighbours in the next lane do not count)."""
-    direction = np.array([np.cos(heading), np.sin(heading)])
-    offset = positions - position
-    along = offset @ direction
-    across = np.abs(offset[:, 0] * direction[1] - offset[:, 1] * direction[0])
-    return along, across < half_sizes[:, 1] + vehicle_type.WIDTH / 2.0 + 0.5
+def _lane_offsets(points: np.ndarray, headings: np.ndarray, widths: np.ndarray, positions: np.ndarray,
+                  half_sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For new vehicles at ``points`` ``(K, 2)`` (highway-env frame) with ``headings`` [rad] and ``widths`` [m]
+    ``(K,)``: the signed distance [m] along each one's heading to each vehicle at ``positions`` ``(M, 2)``
+    (half lengths and widths ``half_sizes`` ``(M, 2)``), and whether that vehicle overlaps its lane (lateral
+    distance under the two half widths + 0.5 m, so neighbours in the next lane do not count); both ``(K, M)``."""
+    direction = np.stack([np.cos(headings), np.sin(headings)], axis=1)[:, None, :]
+    offset = positions[None, :, :] - points[:, None, :]
+    along = (offset * direction).sum(axis=2)
+    across = np.abs(offset[..., 0] * direction[..., 1] - offset[..., 1] * direction[..., 0])
+    return along, across < half_sizes[None, :, 1] + widths[:, None] / 2.0 + 0.5
 
 
-def _blocking(along: np.ndarray, same_lane: np.ndarray, vehicle_type, half_sizes: np.ndarray) -> np.ndarray:
-    """Which vehicles (from :func:`_lane_offsets`) a new ``vehicle_type`` would overlap in lane or come within
-    :data:`SPAWN_CLEARANCE_M` of, bumper to bumper."""
-    return same_lane & (np.abs(along) < half_sizes[:, 0] + vehicle_type.LENGTH / 2.0 + SPAWN_CLEARANCE_M)
-
-
-def _blocked(along: np.ndarray, same_lane: np.ndarray, vehicle_type, half_sizes: np.ndarray) -> bool:
-    return bool(np.any(_blocking(along, same_lane, vehicle_type, half_sizes)))
+def _blocking(along: np.ndarray, same_lane: np.ndarray, lengths: np.ndarray, half_sizes: np.ndarray) -> np.ndarray:
+    """``(K, M)``: which vehicles (from :func:`_lane_offsets`) new vehicles of ``lengths`` [m] ``(K,)`` would
+    overlap in lane or come within :data:`SPAWN_CLEARANCE_M` of, bumper to bumper."""
+    return same_lane & (np.abs(along) < half_sizes[None, :, 0] + lengths[:, None] / 2.0 + SPAWN_CLEARANCE_M)
 
 
 def _safe_to_join(vehicle, front, rear) -> bool:
