@@ -12,7 +12,6 @@ replaced.
 from __future__ import annotations
 
 import re
-import tomllib
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -20,6 +19,8 @@ if TYPE_CHECKING:
     from pydantic import ValidationError
 
     from .schema import Scenario
+
+from .files import read_toml, validate_strict
 
 CATALOG_DIR = Path(__file__).resolve().parent
 SUITES_DIR = CATALOG_DIR / "suites"
@@ -55,13 +56,7 @@ def suite_catalog() -> dict[str, Path]:
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
-    try:
-        with path.open("rb") as handle:
-            return tomllib.load(handle)
-    except FileNotFoundError:
-        raise ScenarioError(f"scenario file {str(path)!r} does not exist") from None
-    except tomllib.TOMLDecodeError as error:
-        raise ScenarioError(f"scenario file {str(path)!r}: not valid TOML: {error}") from None
+    return read_toml(path, "scenario file", ScenarioError)
 
 
 def _merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
@@ -137,6 +132,8 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     raw = _resolve(path, ())
     raw.setdefault("name", path.stem)
     try:
-        return Scenario.model_validate(raw)
+        return validate_strict(Scenario, raw)
     except ValidationError as error:
         raise ScenarioError(f"scenario file {str(path)!r}: {describe_errors(error)}") from None
+    except ValueError as error:
+        raise ScenarioError(f"scenario file {str(path)!r}: {error}") from None

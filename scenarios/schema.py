@@ -20,6 +20,10 @@ RIG_PRESETS = ("surround6", "stereo", "ring", "custom")
 ACTOR_CLASSES = ("car", "truck", "bus", "motorcycle")
 
 
+Speed = Annotated[float, Field(gt=0, le=100, allow_inf_nan=False)]
+"""[m/s] a vehicle speed: positive, at most 100 m/s (360 km/h)."""
+
+
 class TrafficConfig(Strict):
     """Traffic around the ego vehicle.
 
@@ -34,15 +38,15 @@ class TrafficConfig(Strict):
     """[-] highway-v0 lane the ego starts in, 0 the leftmost; random (from the seed) when omitted."""
     vehicles: Annotated[int, Field(ge=0, le=200)] = 40
     """[-] other vehicles kept inside the window."""
-    window_radius_m: PositiveFloat = 150.0
+    window_radius_m: Annotated[float, Field(gt=0, le=2000, allow_inf_nan=False)] = 150.0
     """[m] radius of the window around the ego in which traffic is kept."""
     spawn_min_distance_m: NonNegativeFloat = 100.0
     """[m] new vehicles appear at a distance from the ego between this and the radius."""
-    initial_clearance_m: NonNegativeFloat = 12.0
+    initial_clearance_m: Annotated[float, Field(ge=0, le=2000, allow_inf_nan=False)] = 12.0
     """[m] no vehicle is placed closer than this to the ego at the start."""
-    speed_range_mps: tuple[PositiveFloat, PositiveFloat] = (20.0, 30.0)
+    speed_range_mps: tuple[Speed, Speed] = (20.0, 30.0)
     """[m/s] target speeds of other vehicles are drawn uniformly from this range."""
-    ego_speed_mps: PositiveFloat = 25.0
+    ego_speed_mps: Speed = 25.0
     """[m/s] target speed of the ego's IDM driver."""
     simulation_substeps: Annotated[int, Field(ge=1, le=20)] = 1
     """[-] highway-env integration steps per output frame."""
@@ -163,3 +167,26 @@ class Scenario(Strict):
         """[s] time between two frames."""
         return 1.0 / self.frame_rate_hz
 
+
+    @model_validator(mode="after")
+    def _check_windows(self) -> Scenario:
+        """A perturbation whose window starts after the last frame can never take effect: an error, not a no-op."""
+        for index, perturbation in enumerate(self.perturbations):
+            first, _ = perturbation.frame_window(self.frame_rate_hz)
+            if first >= self.frames:
+                key = "frames" if perturbation.frames is not None else "seconds"
+                raise ValueError(f"perturbations.{index}.{key}: the window starts at frame {first}, after the last "
+                                 f"frame ({self.frames - 1}) of the run, so it would never take effect")
+        return self
+
+
+def windows_outside(scenario: Scenario, frames: int) -> list[str]:
+    """Perturbations of ``scenario`` whose window starts at or after ``frames`` (a ``--frames`` shorter than the
+    scenario's own cuts them off): one message each, for a warning."""
+    messages = []
+    for index, perturbation in enumerate(scenario.perturbations):
+        first, _ = perturbation.frame_window(scenario.frame_rate_hz)
+        if first >= frames:
+            messages.append(f"perturbations.{index} ({perturbation.kind}) starts at frame {first}, after the last "
+                            f"of the {frames} frames generated: it has no effect")
+    return messages

@@ -20,8 +20,9 @@ class RenderConfig(Strict):
 
     visibility: bool = True
     """Measure occlusion by rendering; when false every actor in view counts as unoccluded (faster)."""
-    visibility_scale: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = 0.5
-    """[-] visibility render resolution relative to the image (0.5: 800×450 for a 1600×900 camera)."""
+    visibility_scale: Annotated[float, Field(ge=0.05, le=1, allow_inf_nan=False)] = 0.5
+    """[-] visibility render resolution relative to the image (0.5: 800×450 for a 1600×900 camera); at least
+    0.05, below which small actors cover no pixel and read as fully occluded."""
 
 
 class DetectionConfig(Strict):

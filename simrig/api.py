@@ -60,13 +60,14 @@ def open_dataset(path: Path | str, *, verify: bool = False) -> Dataset:
 
 
 def track(dataset: Dataset | Path | str, tracker, *, params: dict | None = None, out: Path | str | None = None,
-          seed: int | None = None) -> TrackingRun:
+          seed: int | None = None, frame_time_limit_s: float | None = 60.0) -> TrackingRun:
     """Run ``tracker`` over the dataset's sensor frames: a registered name (``simrig trackers``), a
     ``"module:attribute"``, a factory or class (called with ``params``) or a tracker object. The tracks stay in
-    memory (``.tracks``, ready for :func:`score`); ``out`` also writes them as a tracks folder."""
+    memory (``.tracks``, ready for :func:`score`); ``out`` also writes them as a tracks folder. A ``step()``
+    running longer than ``frame_time_limit_s`` [s] is stopped (None: no limit)."""
     from simrig.pipeline.track import run_tracker
 
-    return run_tracker(dataset, tracker, out, params, seed=seed)
+    return run_tracker(dataset, tracker, out, params, seed=seed, frame_time_limit_s=frame_time_limit_s)
 
 
 def score(dataset: Dataset | Path | str, tracks: TrackingRun | TrackSet | Path | str, *,
@@ -84,19 +85,22 @@ def score(dataset: Dataset | Path | str, tracks: TrackingRun | TrackSet | Path |
 
 def run(scenario: str | Path | Scenario = "highway_surround6", *, seed: int = 0, tracker: str = "saga",
         params: dict | None = None, out: Path | str | None = None, frames: int | None = None,
-        overwrite: bool = False, camera: str | None = None) -> PipelineResult:
-    """Generate, track, score and report into ``out`` (default ``runs/SCENARIO-seedN``), as ``simrig run``."""
+        overwrite: bool = False, camera: str | None = None, frame_time_limit_s: float | None = 60.0) -> PipelineResult:
+    """Generate, track, score and report into ``out`` (default ``runs/SCENARIO-seedN``), as ``simrig run``: a
+    matching complete dataset already in ``out/dataset`` is reused."""
     from simrig.pipeline.run import run_pipeline
 
     return run_pipeline(scenario, seed=seed, tracker=tracker, params=params, out=out, frames=frames,
-                        overwrite=overwrite, camera=camera)
+                        overwrite=overwrite, camera=camera, frame_time_limit_s=frame_time_limit_s)
 
 
 def bench(suite: str | Path, *, engine: str = "local", workers: int | None = None, out: Path | str | None = None,
-          cache: Path | str | None = None, address: str | None = None, progress: bool = False) -> BenchRun:
+          cache: Path | str | None = None, address: str | None = None, progress: bool = False,
+          trust_file: bool = False) -> BenchRun:
     """Run a suite (a named one such as ``"smoke"``, or a suite file) as ``simrig bench``: every scenario ×
-    sweep value × seed, every tracker on the same detections, resumable, into ``out``."""
+    sweep value × seed, every tracker on the same detections, resumable, into ``out``. ``trust_file`` lets the
+    suite file import its ``module:attribute`` trackers."""
     from simrig.benchmark import run_bench
 
     return run_bench(suite, engine=engine, workers=workers, out=out, cache=cache, address=address,
-                     progress=progress)
+                     progress=progress, trust_file=trust_file)

@@ -7,6 +7,7 @@ line ``simrig: error: ...`` with exit status 2; no traceback.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -14,9 +15,12 @@ from simrig.scenarios import DEFAULT_SCENARIO, ScenarioError, catalog, load_scen
 
 from .errors import SimrigError
 
+MAX_FRAMES = 1_000_000
+"""The most frames a scenario may ask for (``scenarios.schema.Scenario.frames``)."""
 
-def _int_at_least(minimum: int):
-    """An argparse type: an integer ≥ ``minimum``, with a one-line message otherwise."""
+
+def _int_at_least(minimum: int, maximum: int = 2**63 - 1):
+    """An argparse type: an integer in ``minimum … maximum``, with a one-line message otherwise."""
 
     def parse(text: str) -> int:
         try:
@@ -25,6 +29,8 @@ def _int_at_least(minimum: int):
             raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
         if value < minimum:
             raise argparse.ArgumentTypeError(f"must be at least {minimum}, got {value}")
+        if value > maximum:
+            raise argparse.ArgumentTypeError(f"must be at most {maximum}, got {text}")
         return value
 
     return parse
@@ -35,6 +41,15 @@ class _OneLineParser(argparse.ArgumentParser):
 
     def error(self, message: str):
         self.exit(2, f"simrig: error: {message} (see '{self.prog} --help')\n")
+
+
+def _output(path: Path | None, what: str, *, inputs=(), folder: bool = True) -> Path | None:
+    """``path`` checked as an output before any work (:func:`simrig.dataset.outputs.check_output_path`)."""
+    if path is None:
+        return None
+    from .dataset.outputs import check_output_path
+
+    return check_output_path(path, what=what, inputs=inputs, folder=folder)
 
 
 def _cmd_generate(args: argparse.Namespace) -> int:
@@ -65,7 +80,18 @@ def _cmd_generate(args: argparse.Namespace) -> int:
                 f"warning: {event['event']} at frame {event['frame']}; the scenario ran on to its last frame",
                 file=sys.stderr,
             )
+    _warn_ineffective(scenario, result.path)
     return 0
+
+
+def _warn_ineffective(scenario, dataset_path: Path) -> None:
+    """``warning: ...`` on stderr for every setting that could not take effect in the generated dataset."""
+    from simrig.pipeline.checks import ineffective_settings
+
+    from .dataset import Dataset
+
+    for message in ineffective_settings(scenario, Dataset.open(dataset_path)):
+        print(f"warning: {message}", file=sys.stderr)
 
 
 def _cmd_scenarios(args: argparse.Namespace) -> int:
@@ -82,25 +108,38 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
 def _cmd_info(args: argparse.Namespace) -> int:
     from .dataset import Dataset
 
-    dataset = Dataset.open(args.dataset, verify=args.verify)
+    dataset = Dataset.open(args.dataset)
+    extra = dataset.verify() if args.verify else []
     print(dataset.summary())
     if args.verify:
-        print("verified  every file matches its SHA-256 in the manifest")
+        print("verified  the manifest and every file it lists match their SHA-256")
+        if extra:
+            shown = ", ".join(extra[:10]) + (f" and {len(extra) - 10} more" if len(extra) > 10 else "")
+            print(f"extra     {len(extra)} file(s) not in the manifest (not part of the dataset): {shown}")
     return 0
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
     from simrig.figures.mosaic import render_mosaic
 
-    out = args.out or Path(args.dataset) / f"mosaic_{args.frame:06d}.png"
-    print(render_mosaic(args.dataset, args.frame, out))
+    from .dataset import Dataset
+    from .dataset.manifest import MANIFEST_NAME
+
+    dataset = Dataset.open(args.dataset)
+    out = _output(args.out, "--out", folder=False) or Path(args.dataset) / f"mosaic_{args.frame:06d}.png"
+    if out.resolve().parent == dataset.path.resolve() and (
+            out.name == MANIFEST_NAME or out.name in {entry["file"] for entry in dataset.manifest["files"].values()}):
+        raise SimrigError(f"--out {str(out)!r} is one of the dataset's own files; write elsewhere")
+    print(render_mosaic(dataset.path, args.frame, out))
     return 0
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
     from .testing.replay import replay
 
-    result = replay(args.file, tracker=args.tracker, params=_params(args.param) if args.param else None, out=args.out)
+    _output(args.out, "--out")
+    result = replay(args.file, tracker=args.tracker, params=_params(args.param) if args.param else None, out=args.out,
+                    trust_file=args.trust_file)
     print(result.report.table())
     print()
     print(result.summary())
@@ -121,13 +160,17 @@ def _cmd_score(args: argparse.Namespace) -> int:
     from .dataset.evaluation import evaluation_overrides
     from .scoring import score
 
+    for option in ("json", "errors"):
+        _output(getattr(args, option), f"--{option}", inputs=(args.dataset, args.tracks), folder=False)
     report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera,
                    evaluation=evaluation_overrides(args.evaluation))
     print(report.table())
     if args.json is not None:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
         report.write_json(args.json)
         print(f"wrote {args.json}")
     if args.errors is not None:
+        args.errors.parent.mkdir(parents=True, exist_ok=True)
         report.write_errors(args.errors)
         print(f"wrote {args.errors} ({report.errors.num_rows} errors with their causes)")
     return 0
@@ -141,9 +184,12 @@ def _tracker_param(text: str) -> tuple[str, object]:
         raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
     for convert in (int, float):
         try:
-            return key, convert(raw)
+            value = convert(raw)
         except ValueError:
-            pass
+            continue
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"{key}={raw}: a parameter must be a finite number")
+        return key, value
     lowered = raw.lower()
     if lowered in ("true", "false"):
         return key, lowered == "true"
@@ -162,7 +208,9 @@ def _params(pairs: list[tuple[str, object]] | None) -> dict[str, object]:
 def _cmd_track(args: argparse.Namespace) -> int:
     from simrig.pipeline.track import run_tracker
 
-    result = run_tracker(args.dataset, args.tracker, args.out, _params(args.param))
+    _output(args.out, "--out", inputs=(args.dataset,))
+    result = run_tracker(args.dataset, args.tracker, args.out, _params(args.param),
+                         frame_time_limit_s=args.frame_time_limit)
     print(
         f"tracked   {result.frames} frames with {args.tracker}: {result.track_rows} track rows, "
         f"{result.frames_per_second:.0f} frames/s in step()"
@@ -188,15 +236,25 @@ def _cmd_trackers(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from simrig.pipeline.run import run_pipeline
 
+    from .dataset import Dataset
+
+    _output(args.out, "--out")
     result = run_pipeline(
         args.scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=args.out,
         frames=args.frames, overwrite=args.overwrite, progress=not args.quiet, camera=args.camera,
+        frame_time_limit_s=args.frame_time_limit,
     )
+    manifest = Dataset.open(result.dataset).manifest
+    if result.reused:
+        print(f"dataset   reusing the complete dataset in {result.dataset} ({manifest['scenario']['name']}, "
+              f"seed {manifest['seed']}, {manifest['frames']} frames: the same resolved scenario and seed)\n")
     print(result.report.table())
     print(f"\ntracked   {result.tracking.frames} frames with {args.tracker} "
           f"({result.tracking.frames_per_second:.0f} frames/s in step())")
     for path in result.written:
         print(f"wrote     {path}")
+    if not result.reused:
+        _warn_ineffective(result.scenario, result.dataset)
     return 0
 
 
@@ -205,20 +263,25 @@ def _non_negative_float(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value >= 0.0:
-        raise argparse.ArgumentTypeError(f"must be ≥ 0, got {text}")
+    if not 0.0 <= value < math.inf:
+        raise argparse.ArgumentTypeError(f"must be a finite number ≥ 0, got {text}")
     return value
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
     from .benchmark import run_bench
+    from .benchmark.api import BenchInterrupted
 
+    _output(args.out, "--out")
+    _output(args.cache, "--cache")
     try:
         result = run_bench(args.suite, engine=args.engine, workers=args.workers, out=args.out, cache=args.cache,
-                           address=args.address, progress=not args.quiet)
-    except KeyboardInterrupt:
-        print("simrig: interrupted; every finished cell is kept: run the same command again to resume",
-              file=sys.stderr)
+                           address=args.address, progress=not args.quiet, trust_file=args.trust_file)
+    except BenchInterrupted as stop:
+        print(f"simrig: {stop.message()}", file=sys.stderr)
+        return 130
+    except KeyboardInterrupt:  # before any cell ran (loading the suite, making the plan)
+        print("simrig: interrupted before any cell ran; nothing was lost", file=sys.stderr)
         return 130
     print(f"bench     {result.out}: {result.points} points, {result.cells} cells ({result.cells_skipped} finished "
           f"earlier, {result.cells_run} run now), {result.rows} result rows")
@@ -230,6 +293,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 def _cmd_report(args: argparse.Namespace) -> int:
     from .report import write_report
 
+    _output(args.out, "--out")
     print(write_report(args.results, out=args.out))
     return 0
 
@@ -282,6 +346,7 @@ def build_parser() -> argparse.ArgumentParser:
     replay.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
                         help="a tracker parameter, repeatable (default: the file's)")
     replay.add_argument("--out", type=Path, default=None, help="keep the dataset and tracks here (default: temporary)")
+    _trust_argument(replay, "the replay file")
     replay.set_defaults(run=_cmd_replay)
 
     exporter = commands.add_parser("export", help="write a dataset (and a tracker's output) for other tools")
@@ -317,6 +382,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="datasets by content key, shareable between suites (default: OUT/datasets)")
     bench.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
+    _trust_argument(bench, "the suite file")
     bench.set_defaults(run=_cmd_bench)
 
     report = commands.add_parser("report", help="write reports/SUITE/index.md with plots from a bench folder")
@@ -336,11 +402,17 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _trust_argument(parser: argparse.ArgumentParser, what: str) -> None:
+    parser.add_argument("--trust-file", action="store_true",
+                        help=f"let {what} import its module:attribute trackers (a data file may otherwise only "
+                        "name registered trackers)")
+
+
 def _scenario_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
                         help=f"catalog name or .toml file (default: {DEFAULT_SCENARIO})")
     parser.add_argument("--seed", type=_int_at_least(0), default=0, help="scenario seed (default 0)")
-    parser.add_argument("--frames", type=_int_at_least(1), default=None,
+    parser.add_argument("--frames", type=_int_at_least(1, MAX_FRAMES), default=None,
                         help="frames to generate (default: the scenario's)")
 
 
@@ -349,6 +421,8 @@ def _tracker_arguments(parser: argparse.ArgumentParser) -> None:
                         "'simrig trackers')")
     parser.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
                         help="a tracker parameter, repeatable (e.g. --param gate=4 --param life=mutr3d)")
+    parser.add_argument("--frame-time-limit", type=_non_negative_float, default=60.0, metavar="SECONDS",
+                        help="stop the tracker when one step() runs longer than this (default 60; 0: no limit)")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -164,8 +164,9 @@ def test_failing_tracker_names_the_cell_and_keeps_finished_work(tmp_path, monkey
     suite.write_text(text + '[[trackers]]\ntracker = "bench_trackers:Crashing"\n')
     monkeypatch.syspath_prepend(str(TESTS))
     with pytest.raises(BenchError, match=r"cell \w+ \(tiny_scenario, seed 0, 25 frames\), tracker "
-                                         r"bench_trackers:Crashing: RuntimeError: this tracker always fails"):
-        run_bench(suite, out=tmp_path / "out", workers=1)
+                                         r"bench_trackers:Crashing: tracker 'bench_trackers:Crashing': frame 0: "
+                                         r"step\(\) raised RuntimeError: this tracker always fails"):
+        run_bench(suite, out=tmp_path / "out", workers=1, trust_file=True)
     assert not (tmp_path / "out" / "results.parquet").exists()
 
 

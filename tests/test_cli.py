@@ -1,5 +1,7 @@
 """The command line: summaries, and one-line errors that name the problem."""
 
+import json
+
 import pytest
 
 from simrig.cli import main
@@ -112,10 +114,38 @@ def test_run_generates_tracks_scores_and_reports_with_the_command(tmp_path, caps
     out = tmp_path / "run"
     assert main(["run", "highway_stereo", "--frames", "12", "--tracker", "simpletrack", "--out", str(out),
                  "--quiet"]) == 0
-    assert "AMOTA" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "AMOTA" in printed and "reusing" not in printed
     report = (out / "report.md").read_text()
-    assert f"simrig run highway_stereo --seed 0 --tracker simpletrack --frames 12 --out {out}" in report
-    assert (out / "score.json").exists() and (out / "errors.parquet").exists()
+    assert "simrig run highway_stereo --seed 0 --tracker simpletrack --frames 12 --out THIS_FOLDER" in report
+    assert str(tmp_path) not in report  # no absolute path in a results file
+    scores = out / "scores" / "simpletrack"
+    assert (scores / "score.json").exists() and (scores / "errors.parquet").exists()
     assert (out / "tracks" / "simpletrack" / "tracks3d.parquet").exists()
-    assert main(["run", "highway_stereo", "--frames", "12", "--out", str(out), "--quiet"]) == 2
-    assert "already holds a complete dataset" in _error_line(capsys)
+    assert main(["run", "highway_stereo", "--frames", "12", "--seed", "1", "--out", str(out), "--quiet"]) == 2
+    assert "holds a dataset of another scenario, seed or frame count" in _error_line(capsys)
+
+
+def test_a_second_tracker_reuses_the_matching_dataset_and_writes_its_own_tracks_and_score(tmp_path, capsys):
+    """Issue 17: ``run … --tracker saga --out R`` then ``… --tracker sort --out R``: the second reuses the
+    dataset (and says so), writes its own tracks and score, and leaves the first run's files as they were."""
+    out = tmp_path / "R"
+    common = ["run", "highway_stereo", "--frames", "12", "--seed", "0", "--out", str(out), "--quiet"]
+    assert main([*common, "--tracker", "saga"]) == 0
+    capsys.readouterr()
+    dataset_before = {p.name: p.stat().st_mtime_ns for p in (out / "dataset").iterdir()}
+    saga_score = (out / "scores" / "saga" / "score.json").read_bytes()
+    assert main([*common, "--tracker", "sort"]) == 0
+    printed = capsys.readouterr().out
+    assert f"dataset   reusing the complete dataset in {out / 'dataset'} (highway_stereo, seed 0, 12 frames" in printed
+    assert {p.name: p.stat().st_mtime_ns for p in (out / "dataset").iterdir()} == dataset_before
+    assert (out / "scores" / "saga" / "score.json").read_bytes() == saga_score
+    sort_score = json.loads((out / "scores" / "sort" / "score.json").read_text())
+    assert sort_score["tracks"] == "tracks/sort" and sort_score["dataset"] == "dataset"
+    assert (out / "tracks" / "sort" / "tracks2d.parquet").exists()
+    index = (out / "report.md").read_text()
+    assert "tracker saga" in index and "tracker sort" in index
+    timings = json.loads((out / "scores" / "sort" / "timings.json").read_text())
+    assert timings["dataset_reused"] is True and timings["generation_s"] is None
+
+

@@ -187,13 +187,18 @@ def plugin_project(python: str, project, env: dict) -> None:
     output = run.stdout + run.stderr
     assert run.returncode == 1 and "1 failed, 2 passed" in output, output[-3000:]
     replay_file = project / "simrig-failures" / "test_the_tracker_keeps_tracking_through_misses.toml"
-    assert replay_file.is_file() and f"simrig replay {replay_file}" in output
+    command = f"simrig replay {replay_file} --tracker broken_tracker:DropsAfterOcclusion"
+    assert replay_file.is_file() and command in output  # the tracker named on the command line, not imported
     replay = load_replay(replay_file)
     assert replay.tracker == "broken_tracker:DropsAfterOcclusion" and "recall below one half" in replay.failure
     recorded = replay.scores["2d"]
     assert recorded["CLR_TP"] < recorded["CLR_TP"] + recorded["CLR_FN"]  # the failing run's own numbers
     assert replay.scenario.frames <= 4 and len(replay.scenario.perturbations) <= 1  # shrunk from up to 12 and 2
-    again = subprocess.run([python, "-m", "simrig.cli", "replay", str(replay_file)], cwd=project, env=env,
+    refused = subprocess.run([python, "-m", "simrig.cli", "replay", str(replay_file)], cwd=project, env=env,
+                             capture_output=True, text=True, timeout=300)
+    assert refused.returncode == 2 and "--trust-file" in refused.stderr and refused.stderr.count("\n") == 1
+    again = subprocess.run([python, "-m", "simrig.cli", "replay", str(replay_file), "--tracker",
+                            "broken_tracker:DropsAfterOcclusion"], cwd=project, env=env,
                            capture_output=True, text=True, timeout=300)
     assert again.returncode == 0 and "reproduced: all" in again.stdout, again.stdout[-2000:] + again.stderr[-2000:]
 

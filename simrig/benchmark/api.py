@@ -13,7 +13,7 @@ from tqdm import tqdm
 
 from ..dataset.manifest import write_json_atomic
 from .engine_names import ENGINES
-from .engines import local_engine, machine_workers, ray_engine
+from .engines import Interrupted, local_engine, machine_workers, ray_engine
 from .evaluate import BenchError
 from .plan import Plan, make_plan
 from .results import TABLES, assemble, finished, write_fragment, write_table_atomic
@@ -49,18 +49,23 @@ def run_bench(
     cache: Path | str | None = None,
     address: str | None = None,
     progress: bool = False,
+    trust_file: bool = False,
 ) -> BenchRun:
     """Run every point of ``suite`` (a named suite or a suite file) that has not finished in ``out``
     (default ``runs/bench/SUITE``), then write the tables. ``cache`` holds the datasets by content key
-    (default ``OUT/datasets``); ``workers`` defaults to the processors of this machine."""
+    (default ``OUT/datasets``); ``workers`` defaults to the processors of this machine. ``trust_file`` allows the
+    suite's ``module:attribute`` trackers to be imported (``--trust-file``)."""
     if engine not in ENGINES:
         raise SuiteError(f"--engine {engine!r}: choose one of {', '.join(ENGINES)}")
     if workers is not None and workers < 1:
         raise SuiteError(f"--workers {workers}: must be at least 1")
-    loaded, scenarios = load_suite(suite)
+    loaded, scenarios = load_suite(suite, trust_file=trust_file)
     plan = make_plan(loaded, scenarios)
     out = Path(out) if out is not None else Path("runs") / "bench" / loaded.name
     cache = Path(cache) if cache is not None else out / "datasets"
+    if out.is_dir() and not (out / BENCH_FILE).is_file() and any(p.name != LOCK_FILE for p in out.iterdir()):
+        raise BenchError(f"bench folder {str(out)!r} is not empty and holds no {BENCH_FILE}: simrig writes only into "
+                         "a new or an earlier bench folder; choose another --out")
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out):
         return _run(plan, suite, out, cache, engine, workers, address, progress)
@@ -77,17 +82,44 @@ def _run(plan: Plan, suite: str | Path, out: Path, cache: Path, engine: str, wor
     results = local_engine(jobs, workers) if engine == "local" else ray_engine(jobs, workers, address)
     bar = tqdm(total=len(plan.cells), initial=len(plan.cells) - len(jobs), unit="cell", disable=not progress,
                desc=f"bench {loaded.name}")
+    done_now = 0
     with bar:
-        for _, outcomes, dataset_s in results:
-            for outcome in outcomes:
-                write_fragment(out, outcome, dataset_s)
-            bar.update(1)
+        try:
+            for _, outcomes, dataset_s in results:
+                for outcome in outcomes:
+                    write_fragment(out, outcome, dataset_s)
+                done_now += 1
+                bar.update(1)
+        except Interrupted as stop:
+            raise BenchInterrupted(out, len(plan.cells) - len(jobs), done_now, stop.running,
+                                   stop.pending) from None
+        except KeyboardInterrupt:  # arrived while a finished cell was being recorded
+            results.close()
+            raise BenchInterrupted(out, len(plan.cells) - len(jobs), done_now, None,
+                                   len(jobs) - done_now) from None
     tables = assemble(plan, out)
     for name, table in tables.items():
         write_table_atomic(table, out / name)
     write_json_atomic(out / BENCH_FILE, _description(plan, suite, out, engine, cache, complete=True))
     return BenchRun(out, len(plan.points), tables[TABLES[0]].num_rows, len(plan.cells),
                     len(plan.cells) - len(jobs), len(jobs))
+
+
+class BenchInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped a bench; :meth:`message` says what was kept and what was lost."""
+
+    def __init__(self, out: Path, earlier: int, now: int, running: int | None, pending: int):
+        super().__init__(out, earlier, now, running, pending)
+        self.out, self.earlier, self.now, self.running, self.pending = out, earlier, now, running, pending
+
+    def message(self) -> str:
+        kept = f"{self.earlier + self.now} finished cells are kept in {str(self.out)!r} ({self.now} of them this run)"
+        if self.running is None:
+            lost = f"{self.pending} unfinished cells (running or queued) were stopped; the running ones' work is lost"
+        else:
+            lost = (f"{self.running} running cells were stopped and their work is lost, {self.pending} had not "
+                    "started")
+        return f"interrupted: {kept}; {lost}; run the same command again to finish"
 
 
 @contextmanager

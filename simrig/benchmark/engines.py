@@ -3,6 +3,12 @@ seconds) as cells finish; the caller records them, so the order of completion ne
 
 No scheduler of our own: :class:`concurrent.futures.ProcessPoolExecutor` (``spawn`` processes: pyrender's
 EGL contexts are not safe to fork) or Ray's.
+
+Pool workers die with their driver: each asks the kernel for ``SIGKILL`` when its parent dies
+(``PR_SET_PDEATHSIG``, Linux) and also watches its parent id from a thread (any POSIX system), so a driver
+killed with ``kill -9`` leaves no worker generating on. Workers ignore ``SIGINT``: Ctrl-C reaches the driver,
+which stops the running workers at once (their cells are lost, and the driver says how many) instead of
+waiting for them.
 """
 
 from __future__ import annotations
@@ -13,10 +19,19 @@ from collections.abc import Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
 from ..errors import SimrigError
+from ..lifeline import die_with
 from .evaluate import Outcome, evaluate
 from .plan import Job
 
 Finished = tuple[Job, list[Outcome], float]
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C during a bench: ``running`` cells were stopped (their work is lost; ``None`` when the engine
+    cannot tell running from queued), ``pending`` never started."""
+
+    def __init__(self, running: int | None, pending: int):
+        super().__init__(running, pending)
+        self.running = running
+        self.pending = pending
 
 
 def machine_workers() -> int:
@@ -25,9 +40,11 @@ def machine_workers() -> int:
 
 
 def local_engine(jobs: list[Job], workers: int) -> Iterator[Finished]:
-    """Run ``jobs`` in a pool of ``workers`` spawned processes. Ctrl-C or an error cancels what has not
-    started and stops the pool."""
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    """Run ``jobs`` in a pool of ``workers`` spawned processes. An error cancels what has not started and
+    waits for the running cells; Ctrl-C stops the running workers at once and raises :class:`Interrupted`."""
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=die_with, initargs=(os.getpid(),))
+    pending = {}
     try:
         pending = {pool.submit(evaluate, job): job for job in jobs}
         while pending:
@@ -36,8 +53,29 @@ def local_engine(jobs: list[Job], workers: int) -> Iterator[Finished]:
                 job = pending.pop(future)
                 outcomes, dataset_s = future.result()
                 yield job, outcomes, dataset_s
+    except KeyboardInterrupt:
+        # a future counts as running once queued to the pool (up to one extra per worker): at most one per worker
+        running = min(sum(future.running() for future in pending), workers)
+        _stop_workers(pool)
+        raise Interrupted(running, len(pending) - running) from None
+    except GeneratorExit:  # the caller stopped early (Ctrl-C while it recorded a cell): do not wait either
+        _stop_workers(pool)
+        raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """Terminate every worker of ``pool`` now (their cells are abandoned; a partial dataset folder they were
+    writing is hidden and removed by the next run)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(timeout=5)
+        if process.is_alive():
+            process.kill()
 
 
 def ray_engine(jobs: list[Job], workers: int | None, address: str | None) -> Iterator[Finished]:
@@ -65,6 +103,8 @@ def ray_engine(jobs: list[Job], workers: int | None, address: str | None) -> Ite
             except ray.exceptions.RayTaskError as error:
                 raise error.as_instanceof_cause() from None
             yield job, outcomes, dataset_s
+    except KeyboardInterrupt:
+        raise Interrupted(None, len(pending)) from None
     finally:
         for reference in pending:
             ray.cancel(reference, force=True)

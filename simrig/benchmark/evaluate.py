@@ -11,6 +11,7 @@ import time
 from dataclasses import dataclass, field
 
 from simrig.pipeline.cache import cached_dataset
+from simrig.pipeline.guard import TrackerFault, TrackerTimeout
 from simrig.pipeline.track import run_tracker
 from simrig.scoring.results import METRICS_2D, METRICS_3D
 
@@ -43,6 +44,8 @@ class Outcome:
     scoring_s: float
     scored: str = "3d"
     per_camera: dict[str, dict[str, float]] = field(default_factory=dict)
+    failure: str = ""
+    """Why the tracker has no metrics on this cell (a timeout); empty when it ran to the end."""
 
 
 def evaluate(job: Job) -> tuple[list[Outcome], float]:
@@ -57,9 +60,16 @@ def evaluate(job: Job) -> tuple[list[Outcome], float]:
     outcomes = []
     for key, entry in job.trackers:
         try:
-            run = run_tracker(dataset, entry.tracker, None, dict(entry.params), seed=job.seed)  # tracks in memory
+            run = run_tracker(dataset, entry.tracker, None, dict(entry.params), seed=job.seed,  # tracks in memory
+                              frame_time_limit_s=job.frame_time_limit_s)
             scoring_started = time.perf_counter()
             report = score(dataset, run.tracks, camera=entry.camera)
+        except TrackerTimeout as error:  # the tracker's recorded failure on this cell; the bench goes on
+            outcomes.append(Outcome(job.cell, key, dict.fromkeys(METRIC_COLUMNS, math.nan), (), math.nan, 0.0,
+                                    failure=f"timeout: {error}"))
+            continue
+        except TrackerFault as error:  # a user's tracker failing: the message names it and the frame
+            raise BenchError(f"{where}, tracker {entry.name}: {error}") from error
         except SimrigError as error:
             raise BenchError(f"{where}, tracker {entry.name}: {error}") from None
         except Exception as error:  # a user's tracker failing: keep its traceback as the cause

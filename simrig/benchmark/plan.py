@@ -49,6 +49,8 @@ class Job:
     frames: int
     cache: Path
     trackers: tuple[tuple[str, TrackerEntry], ...]
+    frame_time_limit_s: float = 60.0
+    """[s] limit on one tracker call (the suite's ``frame_time_limit_s``; 0: none)."""
 
 
 def tracker_key(entry: TrackerEntry) -> str:
@@ -86,7 +88,8 @@ class Plan:
             scenario, seed, frames = self.cells[key]
             world = world_key(scenario, seed, frames)
             if pending:
-                (later if world in worlds else first).append(Job(key, scenario, seed, frames, cache, pending))
+                (later if world in worlds else first).append(Job(key, scenario, seed, frames, cache, pending,
+                                                                    self.suite.frame_time_limit_s))
             worlds.add(world)
         return first + later
 

@@ -3,7 +3,7 @@
 Layout of a bench folder::
 
     fragments/CELL/TRACKER_KEY.json   one finished tracker on one cell (written atomically)
-    results.parquet                   one row per point × tracker (RESULTS columns + param.* + metrics)
+    results.parquet                   one row per point × tracker (RESULTS columns + param.* + metrics + failure)
     causes.parquet                    errors by cause: one row per point × tracker × dimension × cause × kind
     cameras.parquet                   2D metrics per point × tracker × camera (and the ground truth ignored there)
     timings.parquet                   seconds per cell × tracker (machine-dependent, so kept out of results)
@@ -41,6 +41,8 @@ POINT_COLUMNS = ("suite", "scenario", "rig", "sweep", "value", "seed", "frames",
 scored on."""
 CAMERA_COLUMNS = (*CAMERA_METRICS, "boxes", "ignored")
 """Metric columns of ``cameras.parquet`` (``boxes``: ground truth in view; ``ignored``: of those, ignored)."""
+FAILURE = "failure"
+"""Last column of the results: why a tracker has no metrics on a cell (``timeout: ...``); null when it ran."""
 PARAMETER_PREFIX = "param."
 """``param.NAME``: the cell's value of every parameter the suite sweeps (null where it does not apply)."""
 
@@ -57,7 +59,9 @@ def write_fragment(out: Path, outcome: Outcome, dataset_s: float) -> None:
         "cell": outcome.cell, "tracker_key": outcome.tracker_key,
         "metrics": {name: None if math.isnan(value) else value for name, value in outcome.metrics.items()},
         "causes": [list(row) for row in outcome.causes],
-        "seconds": {"dataset": dataset_s, "tracking": outcome.tracking_s, "scoring": outcome.scoring_s},
+        "failure": outcome.failure,
+        "seconds": {name: None if math.isnan(value) else value for name, value in
+                    (("dataset", dataset_s), ("tracking", outcome.tracking_s), ("scoring", outcome.scoring_s))},
         "scored": outcome.scored,
         "per_camera": outcome.per_camera,
     })
@@ -89,7 +93,8 @@ def assemble(plan: Plan, out: Path) -> dict[str, pa.Table]:
             cameras += [head | {"camera": camera} | {name: values.get(name) for name in CAMERA_COLUMNS}
                         for camera, values in fragment.get("per_camera", {}).items()]
             settings = {PARAMETER_PREFIX + name: value for name, value in point.settings}
-            rows.append(head | settings | {name: fragment["metrics"][name] for name in METRIC_COLUMNS})
+            rows.append(head | settings | {name: fragment["metrics"][name] for name in METRIC_COLUMNS}
+                        | {"failure": fragment.get("failure") or None})
             causes += [head | {"dimension": dim, "cause": cause, "kind": kind, "count": count}
                        for dim, cause, kind, count in fragment["causes"]]
     timings = [{"cell": cell, "tracker": entry.name,
@@ -113,7 +118,7 @@ def _point_fields() -> list[tuple[str, pa.DataType]]:
 
 def results_schema(parameters: tuple[str, ...]) -> pa.Schema:
     return pa.schema(_point_fields() + [(PARAMETER_PREFIX + name, pa.float64()) for name in parameters]
-                     + [(name, pa.float64()) for name in METRIC_COLUMNS])
+                     + [(name, pa.float64()) for name in METRIC_COLUMNS] + [(FAILURE, pa.string())])
 
 
 def causes_schema() -> pa.Schema:

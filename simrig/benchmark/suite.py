@@ -7,9 +7,10 @@ paths relative to the suite file. Example::
     scenarios = ["highway_surround6", "my_scenario.toml"]
     seeds = [0, 1, 2]
     frames = 100                      # optional: every scenario's own frame count when omitted
+    frame_time_limit_s = 60           # optional: a step() running longer is stopped, recorded as a failure
 
     [[trackers]]
-    tracker = "saga"                  # registered name or "module:attribute"
+    tracker = "saga"                  # registered name ("module:attribute" only with --trust-file)
     [[trackers]]
     label = "hungarian+dedup"         # shown in tables and plots; the tracker spec by default
     tracker = "global_hungarian"
@@ -35,13 +36,13 @@ names the suite file and the entry.
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 from typing import Annotated, Any
 
 from pydantic import Field, ValidationError, model_validator
 
 from simrig.pipeline.track import TrackingError, build_tracker
+from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
 from simrig.scenarios import (
     Scenario,
     ScenarioError,
@@ -50,6 +51,7 @@ from simrig.scenarios import (
     suite_catalog,
 )
 from simrig.scenarios.base import Strict
+from simrig.scenarios.files import read_toml, validate_strict
 from simrig.scenarios.schema import RIG_PRESETS
 
 from ..errors import SimrigError
@@ -105,12 +107,16 @@ class Sweep(Strict):
 class Suite(Strict):
     """A validated suite."""
 
-    name: Annotated[str, Field(min_length=1)]
+    name: Annotated[str, Field(pattern=r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$", max_length=100)]
+    """Names the default bench folder ``runs/bench/NAME``: letters, digits, ``_.-``, no folder part."""
     description: str = ""
     scenarios: Annotated[tuple[str, ...], Field(min_length=1)]
     seeds: Annotated[tuple[Annotated[int, Field(ge=0)], ...], Field(min_length=1)]
-    frames: Annotated[int, Field(ge=1)] | None = None
+    frames: Annotated[int, Field(ge=1, le=1_000_000)] | None = None
     """[-] frames of every cell; each scenario's own when omitted."""
+    frame_time_limit_s: Annotated[float, Field(ge=0, le=86_400, allow_inf_nan=False)] = 60.0
+    """[s] a tracker call (one ``step()``) that runs longer is stopped and that tracker's rows of the cell record
+    the timeout (``failure``) instead of metrics; 0: no limit."""
     base: bool = True
     """Also run each scenario with its own settings (besides the sweeps)."""
     trackers: Annotated[tuple[TrackerEntry, ...], Field(min_length=1)]
@@ -143,24 +149,25 @@ def _path(name_or_path: str | Path) -> Path:
     if text in entries and not Path(text).suffix:
         return entries[text]
     path = Path(text)
-    if not path.is_file():
+    if not path.exists():
         raise SuiteError(f"unknown suite {text!r}: not a named suite ({', '.join(entries)}) nor a .toml file")
     return path
 
 
-def load_suite(name_or_path: str | Path) -> tuple[Suite, dict[str, Scenario]]:
-    """The validated suite and its scenarios by reference (as written in the suite), every check done."""
+def load_suite(name_or_path: str | Path, *, trust_file: bool = False) -> tuple[Suite, dict[str, Scenario]]:
+    """The validated suite and its scenarios by reference (as written in the suite), every check done.
+
+    A tracker given as ``module:attribute`` is refused unless ``trust_file`` (``--trust-file``): a suite file
+    is data and imports nothing on its own (:mod:`simrig.pipeline.trust`)."""
     path = _path(name_or_path)
-    try:
-        with path.open("rb") as handle:
-            raw = tomllib.load(handle)
-    except tomllib.TOMLDecodeError as error:
-        raise SuiteError(f"suite file {str(path)!r}: not valid TOML: {error}") from None
+    raw = read_toml(path, "suite file", SuiteError)
     raw.setdefault("name", path.stem)
     try:
-        suite = Suite.model_validate(raw)
+        suite = validate_strict(Suite, raw)
     except ValidationError as error:
         raise SuiteError(f"suite file {str(path)!r}: {describe_errors(error)}") from None
+    except ValueError as error:
+        raise SuiteError(f"suite file {str(path)!r}: {error}") from None
     where = f"suite file {str(path)!r}"
     scenarios = {}
     for index, reference in enumerate(suite.scenarios):
@@ -169,7 +176,7 @@ def load_suite(name_or_path: str | Path) -> tuple[Suite, dict[str, Scenario]]:
             scenarios[reference] = load_scenario(target)
         except ScenarioError as error:
             raise SuiteError(f"{where}: scenarios.{index}: {error}") from None
-    _check_trackers(suite, scenarios, where)
+    _check_trackers(suite, scenarios, where, trust_file)
     _check_sweeps(suite, scenarios, where)
     return suite, scenarios
 
@@ -179,8 +186,12 @@ def tracker_runs_on(entry: TrackerEntry, scenario: Scenario) -> bool:
     return not entry.rigs or scenario.rig.preset in entry.rigs
 
 
-def _check_trackers(suite: Suite, scenarios: dict[str, Scenario], where: str) -> None:
+def _check_trackers(suite: Suite, scenarios: dict[str, Scenario], where: str, trust_file: bool) -> None:
     for index, entry in enumerate(suite.trackers):
+        try:
+            check_file_reference(entry.tracker, trusted=trust_file, where=f"{where}: trackers.{index}")
+        except TrackerReferenceError as error:
+            raise SuiteError(str(error)) from None
         try:
             build_tracker(entry.tracker, dict(entry.params))
         except TrackingError as error:

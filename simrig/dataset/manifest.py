@@ -2,6 +2,11 @@
 
 ``manifest.json`` is the last file written into a dataset folder, and its ``complete`` flag is its last
 key. A folder without a manifest whose ``complete`` is ``true`` is never read as a dataset.
+
+The manifest guards itself and the files: ``manifest_sha256`` is the SHA-256 of its own content (every key but
+that one and ``complete``, as canonical JSON), checked whenever a dataset is opened, and every file entry holds
+the file's SHA-256, checked whenever the file is read. Every file entry is a plain name in the dataset folder
+(a manifest cannot make simrig read outside it).
 """
 
 from __future__ import annotations
@@ -10,6 +15,7 @@ import hashlib
 import json
 import os
 import platform
+import re
 from importlib import metadata
 from pathlib import Path
 
@@ -55,6 +61,49 @@ def package_versions() -> dict[str, str]:
     return versions
 
 
+_SELF_KEYS = ("manifest_sha256", "complete")
+_SHA256 = re.compile(r"[0-9a-f]{64}")
+
+
+def manifest_digest(manifest: dict) -> str:
+    """SHA-256 of the manifest's own content: canonical JSON of every key but ``manifest_sha256``/``complete``."""
+    content = {key: value for key, value in manifest.items() if key not in _SELF_KEYS}
+    text = json.dumps(content, sort_keys=True, separators=(",", ":"), ensure_ascii=True, allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _plain_name(name: object) -> bool:
+    """A file name with no folder part: it cannot point outside the dataset folder."""
+    return (isinstance(name, str) and name not in ("", ".", "..") and "/" not in name and "\\" not in name
+            and "\0" not in name)
+
+
+def check_manifest(path: Path, manifest: dict) -> None:
+    """Refuse a complete manifest that was edited or that points outside its folder (one line naming the key)."""
+    files = manifest.get("files")
+    if not isinstance(files, dict) or not files:
+        raise DatasetError(f"{path}: manifest key 'files' is missing or not a table")
+    for name, entry in files.items():
+        if not isinstance(entry, dict) or not _plain_name(entry.get("file")):
+            raise DatasetError(f"{path}: manifest files.{name}.file must be a plain file name in the dataset folder, "
+                               f"got {entry.get('file') if isinstance(entry, dict) else entry!r}")
+        if not isinstance(entry.get("sha256"), str) or not _SHA256.fullmatch(entry["sha256"]):
+            raise DatasetError(f"{path}: manifest files.{name}.sha256 is not a SHA-256")
+    images = manifest.get("images")
+    if images is not None and (not isinstance(images, dict) or not _plain_name(images.get("folder"))):
+        raise DatasetError(f"{path}: manifest images.folder must be a plain folder name in the dataset folder")
+    for key, minimum in (("frames", 1), ("seed", 0)):
+        value = manifest.get(key)
+        if type(value) is not int or value < minimum:
+            raise DatasetError(f"{path}: manifest key {key!r} must be an integer ≥ {minimum}, got {value!r}")
+    recorded = manifest.get("manifest_sha256")
+    if recorded is None:
+        raise DatasetError(f"{path}: manifest has no manifest_sha256 (written by an older simrig); regenerate it")
+    if recorded != manifest_digest(manifest):
+        raise DatasetError(f"{path}: manifest was edited after it was written (its content does not match its "
+                           "manifest_sha256); regenerate the dataset")
+
+
 def write_json_atomic(path: Path, data: dict) -> None:
     """Write ``data`` as JSON to ``path`` through a temporary file, flushed to disk, then renamed."""
     temporary = path.with_name(path.name + ".tmp")
@@ -84,4 +133,5 @@ def read_manifest(folder: Path) -> dict | None:
         raise DatasetError(
             f"{path}: format_version {manifest.get('format_version')!r}; this simrig reads {FORMAT_VERSION}"
         )
+    check_manifest(path, manifest)
     return manifest

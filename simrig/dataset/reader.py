@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 from collections.abc import Iterator
 from functools import cached_property
@@ -26,7 +27,7 @@ from ..types import (
     SensorFrame,
 )
 from .ground_truth import GroundTruth
-from .manifest import MANIFEST_NAME, file_sha256, folder_digest, read_manifest
+from .manifest import MANIFEST_NAME, folder_digest, read_manifest
 from .tables import SCHEMAS
 
 
@@ -74,17 +75,44 @@ class Dataset:
             dataset.verify()
         return dataset
 
-    def verify(self) -> None:
-        """Check that every file listed in the manifest exists and has the recorded SHA-256."""
-        for name, entry in self.manifest["files"].items():
-            file = self.path / entry["file"]
-            if not file.exists():
-                raise DatasetError(f"{self.path}: file {entry['file']!r} ({name}) listed in the manifest is missing")
-            if file_sha256(file) != entry["sha256"]:
-                raise DatasetError(f"{self.path}: file {entry['file']!r} does not match its SHA-256 in the manifest")
+    def verify(self) -> list[str]:
+        """Check that every file listed in the manifest exists and has the recorded SHA-256 (the manifest's own
+        hash is checked on :meth:`open`); returns the files in the folder that the manifest does not list
+        (e.g. a mosaic written by ``simrig render``), sorted, relative to the folder."""
+        for name in self.manifest["files"]:
+            self._read_file(name)
         images = self.manifest.get("images")
         if images is not None and folder_digest(self.path / images["folder"]) != images:
             raise DatasetError(f"{self.path}: the images under {images['folder']!r} do not match the manifest")
+        listed = {entry["file"] for entry in self.manifest["files"].values()} | {MANIFEST_NAME}
+        image_folder = self.path / images["folder"] if images is not None else None
+        extra = []
+        for path in self.path.rglob("*"):
+            if path.is_dir() or (image_folder is not None and image_folder in path.parents):
+                continue
+            if path.parent == self.path and path.name in listed:
+                continue
+            extra.append(path.relative_to(self.path).as_posix())
+        return sorted(extra)
+
+    def _read_file(self, name: str) -> bytes:
+        """The bytes of manifest entry ``name``, checked against its SHA-256; a one-line :class:`DatasetError`
+        naming the dataset and the table when it is missing or changed."""
+        entry = self.manifest["files"].get(name)
+        if entry is None:
+            raise DatasetError(f"dataset {str(self.path)!r}: the manifest lists no {name!r}")
+        file = self.path / entry["file"]
+        try:
+            data = file.read_bytes()
+        except FileNotFoundError:
+            raise DatasetError(f"dataset {str(self.path)!r}: {name} ({entry['file']}) is missing") from None
+        except OSError as error:
+            raise DatasetError(f"dataset {str(self.path)!r}: cannot read {name} ({entry['file']}): "
+                               f"{error.strerror or error}") from None
+        if hashlib.sha256(data).hexdigest() != entry["sha256"]:
+            raise DatasetError(f"dataset {str(self.path)!r}: {name} ({entry['file']}) does not match its SHA-256 "
+                               "in the manifest (changed after it was written); regenerate the dataset")
+        return data
 
     # ------------------------------------------------------------------ metadata
     @property
@@ -102,8 +130,7 @@ class Dataset:
 
     @cached_property
     def rig(self) -> Rig:
-        with (self.path / self.manifest["files"]["rig"]["file"]).open(encoding="utf-8") as handle:
-            return rig_from_dict(json.load(handle))
+        return rig_from_dict(json.loads(self._read_file("rig")))
 
     def road_markings(self) -> RoadMarkings | None:
         """The painted lines of the dataset's road (world frame), or None if it recorded none."""
@@ -117,18 +144,18 @@ class Dataset:
         ``projections``, ``visibility``, ``detections``, ``sensor_truth``, ``frames``)."""
         if name not in SCHEMAS:
             raise KeyError(f"unknown table {name!r}; tables: {', '.join(SCHEMAS)}")
+        if name not in self._tables:
+            table = pq.read_table(pa.BufferReader(self._read_file(name)))
+            if not table.schema.equals(SCHEMAS[name], check_metadata=False):
+                raise DatasetError(f"dataset {str(self.path)!r}: {name} columns {table.schema.names} do not match "
+                                   "its schema")
+            self._tables[name] = table
         return self._tables[name]
 
     @cached_property
     def _tables(self) -> dict[str, pa.Table]:
-        tables = {}
-        for name, schema in SCHEMAS.items():
-            file = self.path / self.manifest["files"][name]["file"]
-            table = pq.read_table(file)
-            if not table.schema.equals(schema, check_metadata=False):
-                raise DatasetError(f"{file}: columns {table.schema.names} do not match the {name} schema")
-            tables[name] = table
-        return tables
+        """Tables read so far, each checked against its SHA-256 when first read."""
+        return {}
 
     # ------------------------------------------------------------------ records
     def _ego_rows(self) -> list[tuple[int, float, EgoPose]]:

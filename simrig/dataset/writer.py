@@ -24,41 +24,33 @@ from .manifest import (
     MANIFEST_NAME,
     file_sha256,
     folder_digest,
+    manifest_digest,
     read_manifest,
     write_json_atomic,
 )
+from .outputs import check_output_path, partial_sibling, remove_stale_partials
 from .tables import SCHEMAS
 
 FRAMES_PER_ROW_GROUP = 100
 """Frames buffered in memory before a Parquet row group is written (bounds memory on long runs)."""
 
 
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 def check_output_folder(out: Path, *, overwrite: bool) -> None:
-    """Refuse to write into ``out`` if it holds a complete dataset (without ``overwrite``) or foreign files."""
+    """Refuse to write into ``out`` if it is no place for output (:func:`check_output_path`), holds a complete
+    dataset (without ``overwrite``) or holds anything else: ``overwrite`` replaces only a simrig dataset."""
+    check_output_path(out, what="output folder")
     if not out.exists():
         return
-    if not out.is_dir():
-        raise DatasetError(f"output {str(out)!r} exists and is not a folder")
     manifest = read_manifest(out)
     if manifest is not None and not overwrite:
         raise DatasetExistsError(
             f"output folder {str(out)!r} already holds a complete dataset "
             f"({manifest['scenario']['name']}, seed {manifest['seed']}); pass --overwrite to replace it"
         )
-    if manifest is None and any(out.iterdir()) and not overwrite:
+    if manifest is None and any(out.iterdir()):
         raise DatasetError(
-            f"output folder {str(out)!r} is not empty and holds no simrig dataset; "
-            "choose another folder or pass --overwrite to replace it"
+            f"output folder {str(out)!r} is not empty and holds no simrig dataset; simrig replaces only a folder "
+            "it wrote (--overwrite included): choose another folder"
         )
 
 
@@ -79,7 +71,7 @@ class DatasetWriter:
     def __init__(self, out: Path | str, *, overwrite: bool = False):
         self.out = Path(out)
         self.overwrite = overwrite
-        self.partial = self.out.parent / f".{self.out.name}.partial-{os.getpid()}"
+        self.partial = partial_sibling(self.out)
         self._writers: dict[str, pq.ParquetWriter] = {}
         self._buffers: dict[str, list[dict]] = {name: [] for name in SCHEMAS}
         self._rows: dict[str, int] = dict.fromkeys(SCHEMAS, 0)
@@ -89,7 +81,7 @@ class DatasetWriter:
     def __enter__(self) -> DatasetWriter:
         check_output_folder(self.out, overwrite=self.overwrite)
         self.out.parent.mkdir(parents=True, exist_ok=True)
-        self._remove_stale_partials()
+        remove_stale_partials(self.out)
         self.partial.mkdir()
         return self
 
@@ -99,12 +91,6 @@ class DatasetWriter:
         self._writers.clear()
         if not self._committed:
             shutil.rmtree(self.partial, ignore_errors=True)
-
-    def _remove_stale_partials(self) -> None:
-        for stale in self.out.parent.glob(f".{self.out.name}.partial-*"):
-            pid = stale.name.rsplit("-", 1)[-1]
-            if not pid.isdigit() or int(pid) == os.getpid() or not _pid_alive(int(pid)):
-                shutil.rmtree(stale, ignore_errors=True)
 
     # ------------------------------------------------------------------ content
     def write_frame(self, columns: dict[str, dict[str, np.ndarray]]) -> None:
@@ -169,6 +155,8 @@ class DatasetWriter:
         if images.is_dir():
             full["images"] = folder_digest(images)
         full.pop("complete", None)
+        full.pop("manifest_sha256", None)
+        full["manifest_sha256"] = manifest_digest(full)
         full["complete"] = True
         write_json_atomic(self.partial / MANIFEST_NAME, full)
         self._publish()

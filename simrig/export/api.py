@@ -1,7 +1,14 @@
-"""The export entry point: load what the scorer loads once, hand it to a format, publish atomically."""
+"""The export entry point: load what the scorer loads once, hand it to a format, publish atomically.
+
+Every export folder holds ``simrig-export.json`` (the format and the dataset's scenario and seed); ``--overwrite``
+replaces only a folder that holds it, so it can never delete a dataset or a folder of the user's files. The
+output is checked before any work (:func:`simrig.dataset.outputs.check_output_path`): not inside or around the
+dataset or the tracks, not in a system folder, not under a file. The partial folder is named per process.
+"""
 
 from __future__ import annotations
 
+import os
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,6 +21,8 @@ from simrig.scenarios.evaluation_schema import EvaluationConfig
 from ..dataset import Dataset
 from ..dataset.evaluation import evaluation_of, ignore_rules
 from ..dataset.ground_truth import GroundTruth, project_tracks
+from ..dataset.manifest import write_json_atomic
+from ..dataset.outputs import check_output_path, partial_sibling, remove_stale_partials
 from ..errors import SimrigError
 
 
@@ -44,6 +53,8 @@ def _formats():
 
 
 FORMATS = ("motchallenge", "kitti", "nuscenes")
+MARKER = "simrig-export.json"
+"""The file that marks a folder as written by ``simrig export`` (the only kind ``--overwrite`` replaces)."""
 
 
 def export(dataset: Dataset | Path | str, fmt: str, out: Path | str, *, tracks: Path | str | None = None,
@@ -55,9 +66,13 @@ def export(dataset: Dataset | Path | str, fmt: str, out: Path | str, *, tracks: 
         raise ExportError(f"--format {fmt!r}: known formats are {', '.join(FORMATS)}")
     if not isinstance(dataset, Dataset):
         dataset = Dataset.open(dataset)
-    out = Path(out)
-    if out.exists() and not overwrite:
-        raise ExportError(f"--out {str(out)!r} already exists; pass --overwrite to replace it")
+    out = check_output_path(out, what="--out", inputs=(dataset.path, tracks))
+    if out.exists():
+        if not overwrite:
+            raise ExportError(f"--out {str(out)!r} already exists; pass --overwrite to replace it")
+        if not (out / MARKER).is_file():
+            raise ExportError(f"--out {str(out)!r} was not written by simrig export (it has no {MARKER}); "
+                              "--overwrite replaces only an earlier export: choose another folder")
     truth = dataset.ground_truth
     config = evaluation_of(dataset.scenario, evaluation)
     ignored = ignore_rules(truth, config)
@@ -72,15 +87,24 @@ def export(dataset: Dataset | Path | str, fmt: str, out: Path | str, *, tracks: 
             rows2d = project_tracks(truth, rows3d)
         name = Path(tracks).stem if Path(tracks).is_file() else Path(tracks).name
     data = ExportInput(dataset, truth, config, ignored, rows2d, rows3d, name)
-    partial = out.with_name(f".{out.name}.partial")
-    shutil.rmtree(partial, ignore_errors=True)
-    partial.mkdir(parents=True)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale_partials(out)
+    partial = partial_sibling(out)
+    partial.mkdir()
     try:
         _formats()[fmt](data, partial)
+        scenario = dataset.scenario
+        write_json_atomic(partial / MARKER, {"written_by": "simrig export", "format": fmt,
+                                             "scenario": scenario["name"], "seed": dataset.seed,
+                                             "tracker": name if tracks is not None else None})
     except BaseException:
         shutil.rmtree(partial, ignore_errors=True)
         raise
+    old = None
     if out.exists():
-        shutil.rmtree(out)
-    partial.rename(out)
+        old = out.parent / f".{out.name}.old-{os.getpid()}"
+        os.replace(out, old)
+    os.replace(partial, out)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
     return out

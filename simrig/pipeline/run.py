@@ -1,30 +1,85 @@
-"""``run``: the whole bench on one scenario — generate, track, score, report — into one folder.
+"""``run``: the whole bench on one scenario — generate, track, score, report — into one folder, resumable.
 
-Layout of ``out``: ``dataset/`` (the generated dataset), ``tracks/TRACKER/`` (the tracker's output),
-``score.json`` (every metric), ``errors.parquet`` (every FN/IDS/FRAG with its causes) and ``report.md``
-(the score table and the command that reproduces it).
+Layout of ``out``::
+
+    dataset/                 the generated dataset, shared by every tracker run into this folder
+    tracks/LABEL/            the tracker's tracks (LABEL: the tracker's name, plus a key of its parameters and
+                             scored camera when it has any)
+    scores/LABEL/score.json  every metric of that run: no wall-clock time, no absolute path, no timestamp
+    scores/LABEL/errors.parquet   every FN/IDS/FRAG with its causes
+    scores/LABEL/report.md   the score table and the command that reproduces it
+    scores/LABEL/timings.json     how long generation and the tracker's step() took (machine-dependent)
+    report.md                every tracker run in this folder, one section each (sorted by label)
+
+Resumable and reproducible: a complete dataset already in ``out/dataset`` that matches the resolved scenario,
+seed and frame count is reused (and said so), so a second tracker, or a rerun after a kill, does not generate
+again; one that does not match is refused unless ``overwrite``. Tracking and scoring always run (they are
+deterministic and cheap next to generation) and every file is written atomically, so a rerun after a kill at any
+moment writes the same bytes as an uninterrupted run.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+import json
+import os
+import re
 import shlex
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from simrig.dataset import Dataset
+from simrig.dataset.manifest import read_manifest, write_json_atomic
+from simrig.errors import DatasetExistsError
 from simrig.pipeline.generate import generate
+from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
 from simrig.pipeline.track import TrackingRun, build_tracker, run_tracker
 from simrig.scenarios import Scenario, load_scenario
 from simrig.scoring import ScoreReport, score
 
+DATASET_DIR, TRACKS_DIR, SCORES_DIR, REPORT = "dataset", "tracks", "scores", "report.md"
+
 
 @dataclass(frozen=True)
 class PipelineResult:
-    """What ``run_pipeline`` produced: the score report, the tracking run and every file it wrote."""
+    """What ``run_pipeline`` produced: the score report, the tracking run, every file it wrote, the scenario,
+    the dataset folder, whether that dataset was reused from an earlier run, and the run's label."""
 
     report: ScoreReport
     tracking: TrackingRun
     written: tuple[Path, ...]
+    scenario: Scenario
+    dataset: Path
+    reused: bool
+    label: str
+
+
+def run_label(tracker: str, params: dict | None, camera: str | None) -> str:
+    """The folder name of a tracker run: the tracker's name (characters other than letters, digits, ``_.-``
+    replaced), plus an 8-digit key of its parameters and camera when it has any.
+
+    >>> run_label("saga", None, None), run_label("saga", {"gate": 4}, None) == run_label("saga", {"gate": 4}, None)
+    ('saga', True)
+    """
+    name = re.sub(r"[^\w.-]", "_", tracker)
+    if not params and camera is None:
+        return name
+    identity = json.dumps({"params": params or {}, "camera": camera}, sort_keys=True, default=str)
+    return f"{name}-{hashlib.sha256(identity.encode()).hexdigest()[:8]}"
+
+
+def _matching_dataset(folder: Path, scenario: Scenario, seed: int, frames: int) -> bool | None:
+    """Whether ``folder`` holds a complete dataset of exactly (``scenario``, ``seed``, ``frames``); None when it
+    holds no complete dataset."""
+    if not folder.is_dir():
+        return None
+    manifest = read_manifest(folder)
+    if manifest is None:
+        return None
+    return (manifest["scenario"] == scenario.model_dump(mode="json") and manifest["seed"] == seed
+            and manifest["frames"] == frames)
 
 
 def run_pipeline(
@@ -38,32 +93,71 @@ def run_pipeline(
     overwrite: bool = False,
     progress: bool = False,
     camera: str | None = None,
+    frame_time_limit_s: float | None = FRAME_TIME_LIMIT_S,
 ) -> PipelineResult:
-    """Generate ``scenario`` with ``seed``, run ``tracker`` with ``params`` on it, score (only ``camera``, in
-    2D, when given) and report.
+    """Generate ``scenario`` with ``seed`` (or reuse the matching complete dataset in ``out/dataset``), run
+    ``tracker`` with ``params`` on it, score (only ``camera``, in 2D, when given) and report.
 
-    The tracker is built before generating, so a bad tracker name or parameter fails at once."""
+    The tracker is built before generating, so a bad tracker name or parameter fails at once. ``overwrite``
+    regenerates the dataset even when it matches (and replaces one that does not)."""
     loaded = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     out = Path(out) if out is not None else Path("runs") / f"{loaded.name}-seed{seed}"
     build_tracker(tracker, params)  # checked early: a typo should not cost a generation
-    generated = generate(loaded, seed=seed, out=out / "dataset", frames=frames, overwrite=overwrite, progress=progress)
-    dataset = Dataset.open(generated.path)
-    tracking = run_tracker(dataset, tracker, out / "tracks" / tracker, params)
+    frame_count = loaded.frames if frames is None else frames
+    folder = out / DATASET_DIR
+    matches = _matching_dataset(folder, loaded, seed, frame_count)
+    reused = bool(matches) and not overwrite
+    generation_s = None
+    if not reused:
+        if matches is False and not overwrite:
+            manifest = read_manifest(folder)
+            raise DatasetExistsError(
+                f"{str(folder)!r} holds a dataset of another scenario, seed or frame count "
+                f"({manifest['scenario']['name']}, seed {manifest['seed']}, {manifest['frames']} frames); "
+                "pass --overwrite to replace it or choose another --out")
+        started = time.perf_counter()
+        generate(loaded, seed=seed, out=folder, frames=frames, overwrite=overwrite, progress=progress)
+        generation_s = time.perf_counter() - started
+    dataset = Dataset.open(folder)
+    label = run_label(tracker, params, camera)
+    tracking = run_tracker(dataset, tracker, out / TRACKS_DIR / label, params, frame_time_limit_s=frame_time_limit_s)
     report = score(dataset, tracking.tracks, camera=camera)  # scored in memory; the folder is for the user
-    json_path, errors_path, markdown = out / "score.json", out / "errors.parquet", out / "report.md"
-    report.write_json(json_path)
-    report.write_errors(errors_path)
-    command = _command(scenario, seed, tracker, params, out, frames, overwrite, camera)
-    markdown.write_text(
-        f"# {loaded.name}, seed {seed}, tracker {tracker}\n\n"
-        f"Produced by `{command}`.\n\n"
-        f"The tracker's `step()` ran at {tracking.frames_per_second:.0f} frames/s over {tracking.frames} frames.\n\n"
-        f"```\n{report.table()}\n```\n"
-    )
-    return PipelineResult(report, tracking, (dataset.path, tracking.out, json_path, errors_path, markdown))
+    report = dataclasses.replace(report, dataset=DATASET_DIR, tracks=f"{TRACKS_DIR}/{label}")  # relative to out
+    scores = out / SCORES_DIR / label
+    scores.mkdir(parents=True, exist_ok=True)
+    json_path, errors_path, markdown = scores / "score.json", scores / "errors.parquet", scores / REPORT
+    _write_text_atomic(json_path, json.dumps(report.to_dict(), indent=2) + "\n")
+    partial = errors_path.with_name(f".{errors_path.name}.partial-{os.getpid()}")
+    report.write_errors(partial)
+    os.replace(partial, errors_path)
+    command = _command(scenario, seed, tracker, params, frames, camera)
+    _write_text_atomic(markdown, f"## {loaded.name}, seed {seed}, tracker {tracker}\n\n"
+                                 f"Produced by `{command}`.\n\n```\n{report.table()}\n```\n")
+    write_json_atomic(scores / "timings.json", {
+        "generation_s": generation_s, "dataset_reused": reused, "frames": tracking.frames,
+        "step_s": tracking.step_seconds, "step_frames_per_second": tracking.frames_per_second})
+    index = out / REPORT
+    _write_text_atomic(index, _index(out))
+    return PipelineResult(report, tracking, (folder, tracking.out, json_path, errors_path, markdown, index),
+                          loaded, folder, reused, label)
 
 
-def _command(scenario, seed, tracker, params, out, frames, overwrite, camera=None) -> str:
+def _index(out: Path) -> str:
+    """``out/report.md``: every tracker run in ``out``, one section each, sorted by label."""
+    sections = [path.read_text(encoding="utf-8") for path in sorted((out / SCORES_DIR).glob(f"*/{REPORT}"))]
+    return (f"# Tracker runs in this folder ({len(sections)})\n\nThe dataset in `{DATASET_DIR}/` is shared; each "
+            f"run's tracks are in `{TRACKS_DIR}/LABEL/`, its scores in `{SCORES_DIR}/LABEL/`.\n\n"
+            + "\n".join(sections))
+
+
+def _write_text_atomic(path: Path, text: str) -> None:
+    partial = path.with_name(f".{path.name}.partial-{os.getpid()}")
+    partial.write_text(text, encoding="utf-8")
+    os.replace(partial, path)
+
+
+def _command(scenario, seed, tracker, params, frames, camera=None) -> str:
+    """The command that reproduces a run, with ``--out`` left for the reader (no path in a results file)."""
     words = ["simrig", "run", str(scenario.name if isinstance(scenario, Scenario) else scenario),
              "--seed", str(seed), "--tracker", tracker]
     for key, value in (params or {}).items():
@@ -72,5 +166,4 @@ def _command(scenario, seed, tracker, params, out, frames, overwrite, camera=Non
         words += ["--frames", str(frames)]
     if camera is not None:
         words += ["--camera", camera]
-    words += ["--out", str(out)] + (["--overwrite"] if overwrite else [])
-    return shlex.join(words)
+    return shlex.join(words) + " --out THIS_FOLDER"

@@ -6,8 +6,9 @@ the bench and the CLI both come through here, so a user's tracker and the refere
 
 from __future__ import annotations
 
-import importlib
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,6 +16,8 @@ import simrig.trackers as tracker_registry
 from simrig.dataset import Dataset
 from simrig.dataset.tracks_file import TrackSet, track_tables, tracks_in_memory, write_tracks
 from simrig.errors import SimrigError
+from simrig.pipeline.guard import FRAME_TIME_LIMIT_S, TrackerFault, checked_tracks, time_limit
+from simrig.pipeline.trust import TrackerReferenceError, import_tracker_factory
 from simrig.trackers.errors import TrackerInputError
 from simrig.types import Track
 
@@ -68,48 +71,72 @@ def build_tracker(name, params: dict | None = None):
 
 
 def _import(spec: str):
-    """``"package.module:Attribute.path"`` → the object; a :class:`TrackingError` naming the spec otherwise."""
-    module_name, _, attribute = spec.partition(":")
+    """``"package.module:Attribute.path"`` → the tracker factory; a :class:`TrackingError` naming the spec when
+    it cannot be imported or is not a tracker factory (:mod:`simrig.pipeline.trust`)."""
     try:
-        target = importlib.import_module(module_name)
-        for part in attribute.split("."):
-            target = getattr(target, part)
-    except (ImportError, AttributeError) as error:
-        raise TrackingError(f"tracker {spec!r}: cannot import it ({error})") from None
-    return target
+        return import_tracker_factory(spec)
+    except TrackerReferenceError as error:
+        raise TrackingError(str(error)) from None
 
 
 def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = None, params: dict | None = None,
-                *, seed: int | None = None) -> TrackingRun:
+                *, seed: int | None = None, frame_time_limit_s: float | None = FRAME_TIME_LIMIT_S) -> TrackingRun:
     """Build tracker ``name`` (anything :func:`build_tracker` takes) with ``params``, ``reset`` it on the
     dataset's rig (``seed`` defaults to the dataset's), step it over every sensor frame, and keep its tracks
     (``TrackingRun.tracks``); with ``out``, also write them to that folder. A tracker with a ``finish()``
-    method (semi-online) has its answer for each frame kept instead of ``step``'s."""
+    method (semi-online) has its answer for each frame kept instead of ``step``'s.
+
+    The tracker's code is guarded (:mod:`simrig.pipeline.guard`): each call is stopped after
+    ``frame_time_limit_s`` [s] (None or 0: no limit) with a :class:`~simrig.pipeline.guard.TrackerTimeout`; an
+    exception it raises or a malformed return value is a :class:`~simrig.pipeline.guard.TrackerFault` naming
+    the tracker, the frame and the field."""
     if not isinstance(dataset, Dataset):
         dataset = Dataset.open(dataset)
     tracker = build_tracker(name, params)
-    tracker.reset(rig=dataset.rig, seed=dataset.seed if seed is None else seed)
+    label = _display(name)
+    cameras = dataset.rig.camera_names
+    with _guarded(label, "reset()", frame_time_limit_s):
+        tracker.reset(rig=dataset.rig, seed=dataset.seed if seed is None else seed)
     outputs: list[tuple[int, list[Track]]] = []
     elapsed = 0.0
     for frame in dataset.sensor_frames():
         start = time.perf_counter()
         try:
-            tracks = tracker.step(frame)
+            with _guarded(label, f"frame {frame.frame}: step()", frame_time_limit_s):
+                tracks = tracker.step(frame)
         except TrackerInputError as error:
             raise TrackingError(f"tracker {name!r}: {error}") from None
         elapsed += time.perf_counter() - start
-        outputs.append((frame.frame, tracks))
+        outputs.append((frame.frame, checked_tracks(tracks, tracker=label, frame=frame.frame, cameras=cameras)))
     finish = getattr(tracker, "finish", None)
     if callable(finish):  # a semi-online tracker's final word on every frame (it may revise the past)
         start = time.perf_counter()
-        revised = dict(finish())
+        limit = frame_time_limit_s * max(len(outputs), 1) if frame_time_limit_s else None
+        with _guarded(label, "finish()", limit):
+            revised = finish()
+            revised = dict(revised)
         elapsed += time.perf_counter() - start
-        outputs = [(index, revised.get(index, tracks)) for index, tracks in outputs]
+        outputs = [(index, checked_tracks(revised[index], tracker=label, frame=index, cameras=cameras,
+                                          call="finish()") if index in revised else tracks)
+                   for index, tracks in outputs]
     tables = track_tables(outputs)
-    tracks = tracks_in_memory(tables, frame_count=dataset.frame_count, cameras=dataset.rig.camera_names,
-                              source=f"tracker {_display(name)!r}")
+    tracks = tracks_in_memory(tables, frame_count=dataset.frame_count, cameras=cameras,
+                              source=f"tracker {label!r}")
     path = write_tracks(out, tables) if out is not None else None
     return TrackingRun(path, len(outputs), sum(len(t) for _, t in outputs), elapsed, tracks)
+
+
+@contextmanager
+def _guarded(tracker: str, call: str, seconds: float | None) -> Iterator[None]:
+    """The tracker's ``call`` under a time limit; anything it raises (but its own input complaint) becomes a
+    :class:`TrackerFault` naming tracker and call, with the original exception chained."""
+    try:
+        with time_limit(seconds, f"tracker {tracker!r}: {call}"):
+            yield
+    except (TrackerFault, TrackerInputError):
+        raise
+    except Exception as error:
+        raise TrackerFault(f"tracker {tracker!r}: {call} raised {type(error).__name__}: {error}") from error
 
 
 def _display(name) -> str:

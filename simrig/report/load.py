@@ -56,6 +56,10 @@ def load_bench(path: Path | str) -> BenchResults:
         description = json.loads(description_path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise ReportError(f"{str(folder)!r} is not a bench folder: it has no {BENCH_FILE}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise ReportError(f"{str(description_path)!r} is not valid JSON ({error})") from None
+    if not isinstance(description, dict):
+        raise ReportError(f"{str(description_path)!r} is not a bench description (a JSON object)")
     if not description.get("complete") or not (folder / RESULTS).is_file():
         raise ReportError(f"bench in {str(folder)!r} did not finish; run '{description.get('command')}' again "
                           "to complete it")

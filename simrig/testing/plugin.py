@@ -16,6 +16,7 @@ command. Nothing here imports hypothesis, the renderer or highway-env until a fi
 from __future__ import annotations
 
 import re
+import shlex
 from pathlib import Path
 
 import pytest
@@ -81,6 +82,11 @@ def pytest_runtest_makereport(item, call):
     message = str(call.excinfo.value) if call.excinfo is not None else ""
     written = write_replay(path, last.scenario, last.seed, tracker=last.tracker, params=last.params,
                            failure=message, scores=last.scores)
-    command = f"simrig replay {written}" + ("" if last.tracker else " --tracker NAME")
+    # a module:attribute tracker is named on the command line: the file alone may not import it
+    from simrig.pipeline.trust import is_import_reference
+
+    command = shlex.join(["simrig", "replay", str(written)]
+                         + (["--tracker", last.tracker] if is_import_reference(last.tracker) else [])
+                         + ([] if last.tracker else ["--tracker", "NAME"]))
     report.sections.append(("simrig replay", f"scenario of the failing run written to {written}\n"
                                              f"reproduce it with: {command}"))

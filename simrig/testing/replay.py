@@ -9,16 +9,18 @@ Layout: ``seed``, ``tracker`` (a registered name or ``module:attribute``; absent
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import tomli_w
 from pydantic import ValidationError
 
+from simrig.scenarios import describe_errors
+from simrig.scenarios.files import read_toml, validate_strict
 from simrig.scenarios.schema import Scenario
 
 from ..errors import SimrigError
+from ..pipeline.trust import TrackerReferenceError, check_file_reference
 from ..scoring import ScoreReport
 
 
@@ -69,22 +71,34 @@ def write_replay(path: Path | str, scenario: Scenario, seed: int, *, tracker: st
 
 
 def load_replay(path: Path | str) -> Replay:
-    """Read a replay file; a :class:`ReplayError` naming the file and key otherwise."""
+    """Read a replay file; a :class:`ReplayError` naming the file and key otherwise (strict types: ``seed``
+    an integer, ``tracker`` and ``camera`` text, ``params`` a table, ``scores`` tables of numbers)."""
     path = Path(path)
+    where = f"replay file {str(path)!r}"
+    document = read_toml(path, "replay file", ReplayError)
+    if "scenario" not in document or type(document.get("seed")) is not int or document["seed"] < 0:
+        raise ReplayError(f"{where}: needs an integer 'seed' ≥ 0 and a [scenario] table")
+    unknown = sorted(set(document) - {"seed", "tracker", "camera", "failure", "params", "scores", "scenario"})
+    if unknown:
+        raise ReplayError(f"{where}: {unknown[0]}: unknown key")
+    for key in ("tracker", "camera", "failure"):
+        if key in document and (not isinstance(document[key], str) or not document[key]):
+            raise ReplayError(f"{where}: {key}: must be non-empty text, got {document[key]!r}")
+    for key in ("params", "scores", "scenario"):
+        if not isinstance(document.get(key, {}), dict):
+            raise ReplayError(f"{where}: {key}: must be a table, got {document[key]!r}")
+    for dimension, metrics in document.get("scores", {}).items():
+        if dimension not in ("2d", "3d") or not isinstance(metrics, dict):
+            raise ReplayError(f"{where}: scores.{dimension}: expected tables [scores.2d] / [scores.3d] of metrics")
+        for metric, value in metrics.items():
+            if type(value) not in (int, float) or not math.isfinite(value):
+                raise ReplayError(f"{where}: scores.{dimension}.{metric}: must be a finite number, got {value!r}")
     try:
-        document = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ReplayError(f"replay file {str(path)!r} does not exist") from None
-    except tomllib.TOMLDecodeError as error:
-        raise ReplayError(f"replay file {str(path)!r}: not TOML ({error})") from None
-    if "scenario" not in document or not isinstance(document.get("seed"), int):
-        raise ReplayError(f"replay file {str(path)!r}: needs an integer 'seed' and a [scenario] table")
-    try:
-        scenario = Scenario.model_validate(document["scenario"])
+        scenario = validate_strict(Scenario, document["scenario"])
     except ValidationError as error:
-        first = error.errors()[0]
-        where = ".".join(str(p) for p in first["loc"])
-        raise ReplayError(f"replay file {str(path)!r}: scenario.{where}: {first['msg']}") from None
+        raise ReplayError(f"{where}: scenario: {describe_errors(error)}") from None
+    except ValueError as error:
+        raise ReplayError(f"{where}: scenario: {error}") from None
     return Replay(scenario, document["seed"], document.get("tracker"), dict(document.get("params", {})),
                   document.get("camera"), document.get("failure"), dict(document.get("scores", {})))
 
@@ -111,9 +125,12 @@ class ReplayResult:
 
 
 def replay(path: Path | str, *, tracker: str | None = None, params: dict | None = None,
-           out: Path | str | None = None) -> ReplayResult:
+           out: Path | str | None = None, trust_file: bool = False) -> ReplayResult:
     """Rerun a replay file: generate its scenario with its seed (into ``out`` or a temporary folder), run its
-    tracker (or ``tracker``) with its parameters (or ``params``) and compare the headline metrics."""
+    tracker (or ``tracker``) with its parameters (or ``params``) and compare the headline metrics.
+
+    The file's own tracker may be a ``module:attribute`` only with ``trust_file`` (``--trust-file``): replay
+    files travel with bug reports and are data. ``tracker`` given here is the caller's choice."""
     import tempfile
 
     from simrig.dataset import Dataset
@@ -130,6 +147,11 @@ def replay(path: Path | str, *, tracker: str | None = None, params: dict | None 
     if not name:
         raise ReplayError(f"replay file {str(path)!r} names no tracker (it was an object without an importable "
                           "name); pass --tracker NAME or module:attribute")
+    if tracker is None:
+        try:
+            check_file_reference(name, trusted=trust_file, where=f"replay file {str(path)!r}")
+        except TrackerReferenceError as error:
+            raise ReplayError(str(error)) from None
     with tempfile.TemporaryDirectory(prefix="simrig-replay-") as scratch:
         root = Path(out) if out is not None else Path(scratch)
         dataset = Dataset.open(generate(loaded.scenario, seed=loaded.seed, out=root / "dataset", overwrite=True).path)

@@ -1,0 +1,109 @@
+"""Running a tracker's code defensively: a time limit per call, and its output checked on return.
+
+A tracker is the user's code. A call that does not return within the limit is stopped (``SIGALRM``, in the
+main thread of a POSIX process: the CLI, a bench worker, a test) and reported as a timeout; an exception is
+reported naming the tracker and the frame; what ``step()`` returns is checked before anything uses it
+(a list of :class:`~simrig.types.Track`, integer ids unique in the frame, known labels, finite scores and
+boxes, known cameras), so a bad value is an error naming tracker, frame, track and field — never a
+traceback from deep inside Arrow or a silently converted number.
+
+Limits: a call stuck inside C code that never returns to Python (a deadlocked extension) cannot be
+interrupted this way; outside the main thread no limit applies.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import threading
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from numbers import Integral, Real
+
+import numpy as np
+
+from simrig.errors import SimrigError
+from simrig.types import ActorClass, Box2D, Box3D, Track
+
+FRAME_TIME_LIMIT_S = 60.0
+"""[s] default limit on one ``step()`` call (``reset`` gets the same; ``finish`` this per frame stepped)."""
+CLASS_NAMES = tuple(member.value for member in ActorClass)
+
+
+class TrackerFault(SimrigError):
+    """The tracker's own code failed: it raised, returned something that is not tracks, or ran too long."""
+
+
+class TrackerTimeout(TrackerFault):
+    """A tracker call did not return within its time limit."""
+
+
+class _Expired(BaseException):
+    """Raised inside the tracker's call by the alarm; a BaseException so that ``except Exception`` in the
+    tracker does not swallow it."""
+
+
+@contextmanager
+def time_limit(seconds: float | None, what: str) -> Iterator[None]:
+    """Stop the block with :class:`TrackerTimeout` (message ``what ... did not return within S s``) after
+    ``seconds``; no limit when ``seconds`` is None or 0, or outside the main thread, or without ``setitimer``."""
+    if not seconds or threading.current_thread() is not threading.main_thread() or not hasattr(signal, "setitimer"):
+        yield
+        return
+
+    def expired(signum, frame):
+        raise _Expired
+
+    previous = signal.signal(signal.SIGALRM, expired)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    except _Expired:
+        raise TrackerTimeout(f"{what} did not return within {seconds:g} s (the per-frame time limit); "
+                             "it was stopped") from None
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def _finite_box(box, kind: type, where: str, field: str) -> None:
+    if not isinstance(box, kind):
+        raise TrackerFault(f"{where}: {field} is a {type(box).__name__}, not a {kind.__name__}")
+    values = box.as_array()
+    if not np.all(np.isfinite(values)):
+        raise TrackerFault(f"{where}: {field} has a non-finite value ({values.tolist()})")
+
+
+def checked_tracks(returned: object, *, tracker: str, frame: int, cameras: tuple[str, ...],
+                   call: str = "step()") -> list[Track]:
+    """``returned`` (what one ``step()`` gave for ``frame``) as a list of valid tracks, or a
+    :class:`TrackerFault` naming ``tracker``, the frame, the track and the field."""
+    where = f"tracker {tracker!r}: frame {frame}"
+    if not isinstance(returned, (list, tuple)):
+        raise TrackerFault(f"{where}: {call} returned a {type(returned).__name__}, not a list of Track")
+    seen: set[int] = set()
+    for index, track in enumerate(returned):
+        if not isinstance(track, Track):
+            raise TrackerFault(f"{where}: item {index} is a {type(track).__name__}, not a Track")
+        track_id = track.track_id
+        if isinstance(track_id, bool) or not isinstance(track_id, Integral):
+            raise TrackerFault(f"{where}: item {index}: track_id {track_id!r} is not an integer")
+        place = f"{where}: track {int(track_id)}"
+        if int(track_id) in seen:
+            raise TrackerFault(f"{place}: track_id appears twice in this frame")
+        seen.add(int(track_id))
+        if not isinstance(track.label, str) or track.label not in CLASS_NAMES:
+            raise TrackerFault(f"{place}: label {track.label!r} is not a known class ({', '.join(CLASS_NAMES)})")
+        score = track.score
+        if isinstance(score, bool) or not isinstance(score, Real) or not math.isfinite(score):
+            raise TrackerFault(f"{place}: score {score!r} is not a finite number")
+        if track.box3d is not None:
+            _finite_box(track.box3d, Box3D, place, "box3d")
+        if not isinstance(track.boxes2d, Mapping):
+            raise TrackerFault(f"{place}: boxes2d is a {type(track.boxes2d).__name__}, not a mapping camera → Box2D")
+        for camera, box in track.boxes2d.items():
+            if camera not in cameras:
+                raise TrackerFault(f"{place}: boxes2d names camera {camera!r}, not one of the rig's "
+                                   f"({', '.join(cameras)})")
+            _finite_box(box, Box2D, place, f"boxes2d[{camera!r}]")
+    return list(returned)

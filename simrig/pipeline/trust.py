@@ -1,0 +1,82 @@
+"""Which tracker references a data file may hold, and what an imported reference must be.
+
+A scenario, suite or replay file is data: it may name a tracker by registered name (or an installed
+``simrig.trackers`` entry point, which is registered too), never make simrig import a module the user did not
+name. A ``module:attribute`` reference read from a file is refused unless the user allowed it explicitly
+(``--trust-file`` on the command line, ``trust_file=True`` in Python); a reference given on the command line or
+in Python is the user's own choice.
+
+Whatever its origin, an imported reference must be a *tracker factory* before it is called with parameters: a
+class with ``reset`` and ``step`` methods, or a Python function whose return annotation is such a class (or
+:class:`~simrig.trackers.Tracker`). ``os:system`` or ``shutil:rmtree`` are neither and are never called.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import typing
+
+import simrig.trackers as tracker_registry
+
+from ..errors import SimrigError
+
+TRUST_FLAG = "--trust-file"
+
+
+class TrackerReferenceError(SimrigError):
+    """A tracker reference may not be followed (untrusted file) or does not lead to a tracker factory."""
+
+
+def is_import_reference(spec: object) -> bool:
+    """Whether ``spec`` is a ``module:attribute`` string rather than a registered tracker name."""
+    return isinstance(spec, str) and ":" in spec and spec not in tracker_registry.available()
+
+
+def check_file_reference(spec: object, *, trusted: bool, where: str) -> None:
+    """Refuse a ``module:attribute`` read from a data file (``where`` names file and key) unless ``trusted``."""
+    if trusted or not is_import_reference(spec):
+        return
+    raise TrackerReferenceError(
+        f"{where}: tracker {spec!r} is a module:attribute reference, and a data file may only name registered "
+        f"trackers (see 'simrig trackers'); to import it, pass {TRUST_FLAG} (you trust this file) or name the "
+        "tracker on the command line with --tracker"
+    )
+
+
+def _has_tracker_methods(target: object) -> bool:
+    return isinstance(target, type) and all(callable(getattr(target, name, None)) for name in ("reset", "step"))
+
+
+def is_tracker_factory(target: object) -> bool:
+    """A class with ``reset``/``step`` methods, or a Python function annotated to return one."""
+    if _has_tracker_methods(target):
+        return True
+    if not inspect.isfunction(target):
+        return False
+    try:
+        returned = typing.get_type_hints(target).get("return")
+    except Exception:  # an annotation that cannot be resolved says nothing we can trust
+        return False
+    return _has_tracker_methods(returned)
+
+
+def import_tracker_factory(spec: str):
+    """``"package.module:Attribute.path"`` → the tracker factory it names; a :class:`TrackerReferenceError`
+    naming the spec when it cannot be imported or is not a tracker factory (nothing of it is called)."""
+    module_name, _, attribute = spec.partition(":")
+    if not module_name or not attribute:
+        raise TrackerReferenceError(f"tracker {spec!r}: expected module:attribute")
+    try:
+        target = importlib.import_module(module_name)
+        for part in attribute.split("."):
+            target = getattr(target, part)
+    except (ImportError, AttributeError, ValueError) as error:
+        raise TrackerReferenceError(f"tracker {spec!r}: cannot import it ({error})") from None
+    if not is_tracker_factory(target):
+        kind = type(target).__name__
+        raise TrackerReferenceError(
+            f"tracker {spec!r} is a {kind}, not a tracker factory: it must be a class with reset() and step() "
+            "methods, or a function annotated to return one (-> MyTracker); it was not called"
+        )
+    return target
