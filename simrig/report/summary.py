@@ -64,7 +64,8 @@ def causes_table(bench: BenchResults, group: Group, kind: str) -> list[str]:
 
 def camera_table(bench: BenchResults, group: Group) -> list[str]:
     """Rows: trackers of ``group``; columns: cameras; cells: 2D HOTA (mean over the base points) and IDSW
-    (summed); a last row with the ground-truth boxes in view and those ignored. Empty without camera data."""
+    (summed), ``-`` where nothing was scored (no box on either side); a last row with the ground-truth boxes in
+    view and those ignored. Empty without camera data."""
     cameras = bench.cameras
     if cameras is None or cameras.empty:
         return []
@@ -76,8 +77,9 @@ def camera_table(bench: BenchResults, group: Group) -> list[str]:
     for tracker, frame in rows.groupby("tracker", sort=False):
         by_camera = frame.groupby("camera", sort=False)
         hota, switches = by_camera["HOTA"].mean(), by_camera["IDSW"].sum()
-        out.append([f"`{tracker}`"] + [f"{number(hota[name])} ({number(switches[name])})" if name in hota
-                                       else "-" for name in names])
+        scored = by_camera["CLR_TP"].sum() + by_camera["CLR_FN"].sum() + by_camera["CLR_FP"].sum()
+        out.append([f"`{tracker}`"] + [f"{number(hota[name])} ({number(switches[name])})"
+                                       if name in hota and scored[name] > 0 else "-" for name in names])
     first = rows[rows["tracker"] == rows["tracker"].iloc[0]].groupby("camera", sort=False)
     boxes, ignored = first["boxes"].sum(), first["ignored"].sum()
     out.append(["ground truth (ignored)"] + [f"{number(boxes[name])} ({number(ignored[name])})" for name in names])
