@@ -168,3 +168,61 @@ def test_saga_drops_a_duplicate_track_but_never_a_neighbour_in_the_next_lane():
     assert [len(ts) for ts in _run("saga", twin_births, birth_merge_m=0)] == [1, 1, 1]
     side_by_side = [_frame(k, {"A": [_detection(20 + k, 1.75)], "B": [_detection(20 + k, -1.75)]}) for k in range(5)]
     assert all(len(ts) == 2 for ts in _run("saga", side_by_side))
+
+
+def _side_by_side_in_one_camera(frames=25, lateral=2.0):
+    """Car 1 alone in camera A for 10 frames; then car 2 appears right beside it (``lateral`` m, 0.1 m of road
+    between two 1.9 m wide cars), both at 10 m/s."""
+    out = []
+    for k in range(frames):
+        x = 20.0 + 1.0 * k
+        views = [_detection(x, 0.0)] + ([_detection(x, lateral)] if k >= 10 else [])
+        out.append(_frame(k, {"A": views}))
+    return out
+
+
+def _recording_updates(t):
+    """Wrap ``t.update`` to record, per frame, the camera of every detection each track was updated with."""
+    fused = []
+    original = t.update
+
+    def update(detections, owner):
+        per_track = {}
+        for j, i in enumerate(owner.tolist()):
+            if i >= 0:
+                per_track.setdefault(i, []).append(int(detections.cameras[j]))
+        fused.append(per_track)
+        return original(detections, owner)
+
+    t.update = update
+    return fused
+
+
+@pytest.mark.parametrize("one_per_camera", [True, False])
+def test_fota_fuses_two_detections_of_one_camera_only_without_the_physical_constraint(one_per_camera):
+    fused = []
+    for frames in (_side_by_side_in_one_camera(), _car_seen_twice(frames=30)):
+        t = tracker.create("saga", one_per_camera=one_per_camera)
+        record = _recording_updates(t)
+        t.reset(rig=RIG)
+        for frame in frames:
+            t.step(frame)
+        fused += record
+    doubled = sum(len(cams) != len(set(cams)) for per_track in fused for cams in per_track.values())
+    assert (doubled == 0) if one_per_camera else (doubled > 0)
+    both = sum(sorted(cams) == [0, 1] for per_track in fused for cams in per_track.values())
+    assert both >= 28  # one detection of each camera per track is still fused (the car seen twice)
+
+
+def test_two_cars_side_by_side_in_one_camera_each_keep_their_own_track():
+    outputs = _run("saga", _side_by_side_in_one_camera())
+    assert [len(ts) for ts in outputs] == [1] * 10 + [2] * 15
+    lanes = {t.track_id: [] for ts in outputs for t in ts}
+    for ts in outputs[10:]:
+        for t in ts:
+            lanes[t.track_id].append(t.box3d.y)
+    assert len(lanes) == 2  # car 1's track never changed id; car 2 got one track of its own
+    near = sorted(lanes.values(), key=lambda ys: np.mean(ys))
+    assert np.allclose(near[0], 0.0, atol=0.2) and np.allclose(near[1][2:], 2.0, atol=0.3)
+    free = _run("saga", _side_by_side_in_one_camera(), one_per_camera=False)
+    assert [len(ts) for ts in free][10:] == [1] * 15  # unconstrained: car 1's track swallows car 2

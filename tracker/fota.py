@@ -19,6 +19,15 @@ Choices where the paper is silent (documented in the README):
   both extra masses positive (a zero mass has no logarithm);
 * bound: ``E`` is the gate, and costs above the gate are capped to ``E`` before solving, so an
   out-of-gate pair costs the same as leaving the detection unmatched (and exp(−C̄/γ) stays representable).
+
+The physical constraint (``cameras`` given): one track takes at most one detection per camera per frame —
+one camera sees one vehicle once. It is enforced in the decoding, not in the transport problem (whose
+marginals cannot express a per-(track, camera) cap): the candidate (track, detection) pairs are those the
+unconstrained decoding would accept — allowed by the gate, holding more of the column's mass than the extra
+row, and not in a column whose argmax is an out-of-gate track — taken greedily by plan mass (ties: lower
+cost, then lower indices), skipping a pair whose detection is taken or whose track already took a detection
+of that camera. A detection that loses its first track this way goes to the next track holding more of its
+mass than the extra row, if any, else stays unmatched. Without conflicts this is the unconstrained decoding.
 """
 
 from __future__ import annotations
@@ -123,11 +132,13 @@ def fota(
     gamma: float = GAMMA,
     iterations: int = ITERATIONS,
     track_mass: float = 2.0,
+    cameras: np.ndarray | None = None,
 ) -> FotaResult:
     """One-to-many assignment of M detections to N tracks (columns to rows of ``cost`` (N, M)).
 
     A pair is allowed when its cost is finite and ``≤ gate``. See the module docstring for the masses,
-    the transported mass s and the bound E (= ``gate``).
+    the transported mass s and the bound E (= ``gate``). ``cameras`` (M,): the camera of each detection;
+    when given, no track receives two detections of one camera.
     """
     n, m = cost.shape
     owner = np.full(m, UNMATCHED, dtype=np.int64)
@@ -144,8 +155,34 @@ def fota(
     augmented, a, b = augmented_problem(capped, p, q, s, bound=gate)
     plan = sinkhorn(a, b, augmented, gamma, iterations)
     best = np.argmax(plan[:, :m], axis=0)
-    matched = best < n
-    columns = np.nonzero(matched)[0]
-    keep = allowed[best[columns], columns]
-    owner[columns[keep]] = best[columns[keep]]
+    if cameras is None:
+        matched = best < n
+        columns = np.nonzero(matched)[0]
+        keep = allowed[best[columns], columns]
+        owner[columns[keep]] = best[columns[keep]]
+    else:
+        owner = _decode_one_per_camera(plan, allowed, best, np.asarray(cameras), capped)
     return FotaResult(owner, plan, s)
+
+
+def _decode_one_per_camera(plan: np.ndarray, allowed: np.ndarray, best: np.ndarray, cameras: np.ndarray,
+                           cost: np.ndarray) -> np.ndarray:
+    """Greedy decoding by plan mass under the one-detection-per-camera-per-track constraint (module
+    docstring)."""
+    n, m = allowed.shape
+    owner = np.full(m, UNMATCHED, dtype=np.int64)
+    real = plan[:n, :m]
+    blocked = (best < n) & ~allowed[np.minimum(best, n - 1), np.arange(m)]  # argmax is an out-of-gate track
+    candidate = allowed & (real > plan[n, :m][None, :]) & ~blocked[None, :]
+    rows, cols = np.nonzero(candidate)
+    if len(rows) == 0:
+        return owner
+    order = np.lexsort((cols, rows, cost[rows, cols], -real[rows, cols]))
+    taken: set[tuple[int, int]] = set()
+    for i, j in zip(rows[order].tolist(), cols[order].tolist(), strict=True):
+        key = (i, int(cameras[j]))
+        if owner[j] != UNMATCHED or key in taken:
+            continue
+        owner[j] = i
+        taken.add(key)
+    return owner
