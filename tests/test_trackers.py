@@ -142,17 +142,34 @@ def test_every_cost_and_the_mutr3d_life_rule_run(name):
     assert all(len(tracks) >= 1 for tracks in outputs)
 
 
-def test_the_mutr3d_rule_counts_misses_below_tau_old_and_resets_only_at_tau_new():
-    rule, life = QueryLife(), TrackLife(score=0.9)
+def test_the_public_codes_mutr3d_rule_counts_misses_below_tau_old_and_resets_only_at_tau_new():
+    rule, life = QueryLife(reset="tau_new"), TrackLife(score=0.9)
     assert not rule.may_start(0.39) and rule.may_start(0.4)
     for score in (0.2, 0.3, 0.37, None):  # 0.37 is between τ_old and τ_new: neither a miss nor a reset
         rule.observe(life, score, DT)
     assert life.misses == 3 and not rule.is_dead(life) and not rule.is_reported(life)
-    rule.observe(life, 0.45, DT)
-    assert life.misses == 0 and rule.is_reported(life)
-    for _ in range(5):
-        rule.observe(life, None, DT)
-    assert rule.is_dead(life)
+
+
+def _mutr3d_scores(life_name, scores):
+    """Feed ``scores`` (one per frame) to the life rule ``life_name`` builds; the frame index (1-based) at
+    which the track is dead, or None."""
+    from simrig.trackers.settings import build_life
+    rule, life = build_life(life_name, min_hits=1, max_age_s=1.0), TrackLife(score=0.9)
+    for frame, score in enumerate(scores, start=1):
+        rule.observe(life, score, DT)
+        if rule.is_dead(life):
+            return frame
+    return None
+
+
+@pytest.mark.parametrize("recovery", [0.37, 0.9])  # between τ_old and τ_new; above τ_new
+def test_mutr3d_life_as_the_paper_says_t_successive_frames_below_tau_old(recovery):
+    low = [0.2, None, 0.3, 0.1]  # 4 frames below τ_old = 0.35 (None: nothing assigned, score 0)
+    assert _mutr3d_scores("mutr3d", low + [recovery] + low + [recovery] * 3) is None  # 4, recover, 4: survives
+    assert _mutr3d_scores("mutr3d", [0.9] + low + [0.34] + [0.9]) == 6  # 5 consecutive: dies at the 5th
+    # The public code's variant needs no succession: a recovery below τ_new does not reset its count.
+    died = _mutr3d_scores("mutr3d_code", low + [recovery] + low + [recovery] * 3)
+    assert died == (6 if recovery < 0.4 else None)
 
 
 def test_same_frames_same_tracks():
