@@ -1,15 +1,18 @@
 """The reference trackers on hand-built frames: one car seen by two cameras, silent cameras, empty frames,
 floods of detections and bad numbers."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from simrig.trackers.errors import TrackerInputError
 from simrig.trackers.life import QueryLife, TrackLife
 
 from simrig import trackers as tracker
+from simrig.geometry import project_boxes
 from simrig.types import ActorClass, Box2D, Box3D, Camera, Detection, EgoPose, Rig, SensorFrame
 
-NAMES = ("saga", "global_hungarian", "percam_merge", "simpletrack")
+NAMES = ("saga", "global_hungarian", "percam_merge", "simpletrack", "mutr3d")
 RIG = Rig("pair", tuple(
     Camera(name, 1600, 900, 1000.0, 1000.0, 800.0, 450.0, (0.0, 0.0, 1.5), yaw)
     for name, yaw in (("A", 0.3), ("B", -0.3))
@@ -22,8 +25,23 @@ def _detection(x, y, *, score=0.9, yaw=0.0, vx=10.0, label=ActorClass.CAR):
 
 
 def _frame(index, per_camera):
-    return SensorFrame(index, index * DT, EgoPose(0, 0, 0, 0), RIG,
-                       {name: tuple(per_camera.get(name, ())) for name in RIG.camera_names})
+    """A frame of RIG with the ego at the origin; each detection's pixel box is its 3D box projected into its
+    camera (kept as given where the box is out of that camera's view)."""
+    ego = EgoPose(0, 0, 0, 0)
+    views = {}
+    for camera, name in enumerate(RIG.camera_names):
+        detections = tuple(per_camera.get(name, ()))
+        with_3d = [d for d in detections if d.box3d is not None]
+        if with_3d:
+            boxes = np.array([[d.box3d.x, d.box3d.y, d.box3d.z, d.box3d.length, d.box3d.width, d.box3d.height,
+                               d.box3d.yaw] for d in with_3d])
+            pixels = iter(project_boxes(boxes, RIG, ego).boxes[camera])
+            detections = tuple(
+                d if d.box3d is None else (lambda p, d=d: replace(d, box=Box2D(*map(float, p)))
+                                           if np.isfinite(p).all() else d)(next(pixels))
+                for d in detections)
+        views[name] = detections
+    return SensorFrame(index, index * DT, ego, RIG, views)
 
 
 def _car_seen_twice(frames=30, silent=()):
@@ -46,7 +64,7 @@ def _run(name, frames, **params):
     return [t.step(frame) for frame in frames]
 
 
-@pytest.mark.parametrize("name", ["saga", "percam_merge", "simpletrack"])
+@pytest.mark.parametrize("name", ["saga", "percam_merge", "simpletrack", "mutr3d"])
 def test_a_car_seen_by_two_cameras_is_one_track_with_one_id(name):
     outputs = _run(name, _car_seen_twice())
     assert all(len(tracks) == 1 for tracks in outputs)
@@ -137,7 +155,8 @@ def test_unknown_parameters_and_values_are_named():
 
 @pytest.mark.parametrize("name", NAMES)
 def test_every_cost_and_the_mutr3d_life_rule_run(name):
-    params = {"life": "mutr3d"} if name == "simpletrack" else {"cost": "giou_bev", "life": "mutr3d"}
+    params = ({"life": "mutr3d"} if name == "simpletrack" else {"cost2d": "centre", "life": "mutr3d_code"}
+              if name == "mutr3d" else {"cost": "giou_bev", "life": "mutr3d"})
     outputs = _run(name, _car_seen_twice(frames=10), **params)
     assert all(len(tracks) >= 1 for tracks in outputs)
 
@@ -243,3 +262,23 @@ def test_two_cars_side_by_side_in_one_camera_each_keep_their_own_track():
     assert np.allclose(near[0], 0.0, atol=0.2) and np.allclose(near[1][2:], 2.0, atol=0.3)
     free = _run("saga", _side_by_side_in_one_camera(), one_per_camera=False)
     assert [len(ts) for ts in free][10:] == [1] * 15  # unconstrained: car 1's track swallows car 2
+
+
+def test_mutr3d_associates_in_the_image_and_updates_in_3d_from_every_camera_that_matched():
+    # Monocular depth error: each camera's 3D box is off by up to 3 m along its own viewing ray, opposite
+    # ways; the projected boxes still overlap the track's projection, so one track takes both and the fused
+    # 3D position lies between the two.
+    frames = []
+    for k in range(20):
+        x = 25.0 + 1.0 * k
+        error = 0.0 if k == 0 else 3.0 if k % 2 else -3.0  # both cameras agree at birth
+        frames.append(_frame(k, {"A": [_detection(x + error, 0.0)], "B": [_detection(x - error, 0.0)]}))
+    outputs = _run("mutr3d", frames)
+    assert all(len(ts) == 1 for ts in outputs) and len({ts[0].track_id for ts in outputs}) == 1
+    assert abs(outputs[-1][0].box3d.x - (25.0 + 19)) < 1.5
+    t = tracker.create("mutr3d")
+    t.reset(rig=RIG)
+    t.step(frames[0])
+    near_in_3d = replace(_detection(26.0, 0.0), box=Box2D(0, 0, 40, 30))  # 1 m off in 3D, elsewhere in pixels
+    far = SensorFrame(1, DT, EgoPose(0, 0, 0, 0), RIG, {"A": (near_in_3d,), "B": ()})
+    assert [track.track_id for track in t.step(far)] == [2]  # not matched in the image: a new query

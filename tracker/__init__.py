@@ -3,14 +3,16 @@
 Trackers import only :mod:`simrig.types` (the shared records), never the world, renderer or scorer.
 
 Registered here: ``saga`` (SAGA-Track with FOTA), ``global_hungarian`` (AB3DMOT-style pooled one-to-one),
-``percam_merge`` (per-camera trackers + heuristic merging), ``simpletrack`` (3D GIoU, two-stage), and the 2D
-per-camera trackers ``sort`` and ``deepsort`` and ``collabmot`` (stereo collaboration on top of them).
+``percam_merge`` (per-camera trackers + heuristic merging), ``simpletrack`` (3D GIoU, two-stage), ``mutr3d``
+(3D tracks projected into every camera, associated there), and the 2D per-camera trackers ``sort`` and
+``deepsort`` and ``collabmot`` (stereo collaboration on top of them).
 """
 
 from .collabmot import collabmot
 from .deepsort import deepsort
 from .errors import TrackerInputError
 from .global_hungarian import global_hungarian
+from .mutr3d import mutr3d
 from .percam_merge import percam_merge
 from .protocol import Tracker
 from .registry import available, create, parameters, register
@@ -26,6 +28,7 @@ for _name, _factory in (
     ("sort", sort),
     ("deepsort", deepsort),
     ("collabmot", collabmot),
+    ("mutr3d", mutr3d),
 ):
     register(_name, _factory)
 
