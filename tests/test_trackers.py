@@ -12,7 +12,7 @@ from simrig import trackers as tracker
 from simrig.geometry import project_boxes
 from simrig.types import ActorClass, Box2D, Box3D, Camera, Detection, EgoPose, Rig, SensorFrame
 
-NAMES = ("saga", "global_hungarian", "percam_merge", "simpletrack", "mutr3d")
+NAMES = ("saga", "global_hungarian", "percam_merge", "simpletrack", "mutr3d", "polymot")
 RIG = Rig("pair", tuple(
     Camera(name, 1600, 900, 1000.0, 1000.0, 800.0, 450.0, (0.0, 0.0, 1.5), yaw)
     for name, yaw in (("A", 0.3), ("B", -0.3))
@@ -64,7 +64,7 @@ def _run(name, frames, **params):
     return [t.step(frame) for frame in frames]
 
 
-@pytest.mark.parametrize("name", ["saga", "percam_merge", "simpletrack", "mutr3d"])
+@pytest.mark.parametrize("name", ["saga", "percam_merge", "simpletrack", "mutr3d", "polymot"])
 def test_a_car_seen_by_two_cameras_is_one_track_with_one_id(name):
     outputs = _run(name, _car_seen_twice())
     assert all(len(tracks) == 1 for tracks in outputs)
@@ -153,7 +153,7 @@ def test_unknown_parameters_and_values_are_named():
         tracker.create("global_hungarian", life="forever")
 
 
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", [name for name in NAMES if name != "polymot"])  # polymot: one cost, one life
 def test_every_cost_and_the_mutr3d_life_rule_run(name):
     params = ({"life": "mutr3d"} if name == "simpletrack" else {"cost2d": "centre", "life": "mutr3d_code"}
               if name == "mutr3d" else {"cost": "giou_bev", "life": "mutr3d"})
@@ -282,3 +282,60 @@ def test_mutr3d_associates_in_the_image_and_updates_in_3d_from_every_camera_that
     near_in_3d = replace(_detection(26.0, 0.0), box=Box2D(0, 0, 40, 30))  # 1 m off in 3D, elsewhere in pixels
     far = SensorFrame(1, DT, EgoPose(0, 0, 0, 0), RIG, {"A": (near_in_3d,), "B": ()})
     assert [track.track_id for track in t.step(far)] == [2]  # not matched in the image: a new query
+
+
+# -- polymot: the modern filter baseline -------------------------------------------------------------------------
+@pytest.mark.parametrize("model_name", ["CTRA", "BICYCLE"])
+def test_turning_models_jacobian_matches_finite_differences(model_name):
+    from filterpy.kalman import KalmanFilter
+    from simrig.trackers import turning_motion
+    from simrig.trackers.motion import KalmanConfig
+    model = getattr(turning_motion, model_name)
+    x0 = np.array([3.0, -2.0, 0.8, 4.6, 1.9, 1.6, 0.7, 12.0, 1.5, 0.3 if model_name == "CTRA" else 0.02])
+
+    def moved(x, dt=0.1):
+        kf = KalmanFilter(dim_x=10, dim_z=7)
+        kf.x, kf.P = x[:, None].copy(), np.zeros((10, 10))
+        model.predict(kf, dt, KalmanConfig())
+        return kf.x[:, 0]
+
+    numeric = np.column_stack([(moved(x0 + e) - moved(x0 - e)) / 2e-6 for e in np.eye(10) * 1e-6])
+    kf = KalmanFilter(dim_x=10, dim_z=7)
+    kf.x, kf.P = x0[:, None].copy(), np.eye(10)
+    model.predict(kf, 0.1, KalmanConfig())
+    analytic_P = kf.P - np.diag(model.process) * 0.1  # F I Fᵀ
+    assert np.allclose(analytic_P, numeric @ numeric.T, atol=1e-6)
+
+
+@pytest.mark.parametrize("model_name", ["CTRA", "BICYCLE"])
+def test_turning_models_follow_a_circle(model_name):
+    # 10 m/s on a 50 m circle: ω = 0.2 rad/s, κ = 0.02 /m; one second in ten steps ends on the circle.
+    from filterpy.kalman import KalmanFilter
+    from simrig.trackers import turning_motion
+    from simrig.trackers.motion import KalmanConfig
+    model = getattr(turning_motion, model_name)
+    kf = KalmanFilter(dim_x=10, dim_z=7)
+    kf.x = np.array([0.0, -50.0, 0.0, 4.6, 1.9, 1.6, 0.0, 10.0, 0.0, 0.2 if model_name == "CTRA" else 0.02])[:, None]
+    for _ in range(10):
+        model.predict(kf, 0.1, KalmanConfig())
+    x, y, heading = kf.x[0, 0], kf.x[1, 0], kf.x[6, 0]
+    assert (x, y) == pytest.approx((50 * np.sin(0.2), -50 * np.cos(0.2)), abs=0.01)
+    assert heading == pytest.approx(0.2)
+
+
+def test_polymot_reports_a_missed_frame_on_its_prediction_with_a_decayed_score():
+    frames = [_frame(k, {} if k == 6 else {"A": [_detection(20.0 + k, 0.0)]}) for k in range(10)]
+    outputs = _run("polymot", frames)
+    assert [len(ts) for ts in outputs] == [1] * 10 and len({ts[0].track_id for ts in outputs}) == 1
+    assert outputs[6][0].score == pytest.approx(0.9 * 0.5)
+    assert outputs[6][0].box3d.x == pytest.approx(26.0, abs=0.3)  # predicted, 1 m per frame
+    assert outputs[7][0].score == pytest.approx(0.9)
+
+
+def test_polymot_second_stage_updates_a_track_with_a_low_score_detection_but_never_starts_one():
+    frames = [_frame(k, {"A": [_detection(20.0 + k, 0.0, score=0.9 if k < 5 else 0.3)]}) for k in range(10)]
+    outputs = _run("polymot", frames)
+    assert all(len(ts) == 1 for ts in outputs) and len({ts[0].track_id for ts in outputs}) == 1
+    assert outputs[9][0].box3d.x == pytest.approx(29.0, abs=0.3) and outputs[9][0].score == pytest.approx(0.3)
+    assert _run("polymot", [_frame(k, {"A": [_detection(20.0 + k, 0.0, score=0.3)]}) for k in range(3)]) == [
+        [], [], []]

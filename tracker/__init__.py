@@ -4,7 +4,8 @@ Trackers import only :mod:`simrig.types` (the shared records), never the world, 
 
 Registered here: ``saga`` (SAGA-Track with FOTA), ``global_hungarian`` (AB3DMOT-style pooled one-to-one),
 ``percam_merge`` (per-camera trackers + heuristic merging), ``simpletrack`` (3D GIoU, two-stage), ``mutr3d``
-(3D tracks projected into every camera, associated there), and the 2D per-camera trackers ``sort`` and
+(3D tracks projected into every camera, associated there), ``polymot`` (the modern filter baseline:
+category-specific motion, multi-cue cost, two-stage association), and the 2D per-camera trackers ``sort`` and
 ``deepsort`` and ``collabmot`` (stereo collaboration on top of them).
 """
 
@@ -14,6 +15,7 @@ from .errors import TrackerInputError
 from .global_hungarian import global_hungarian
 from .mutr3d import mutr3d
 from .percam_merge import percam_merge
+from .polymot import polymot
 from .protocol import Tracker
 from .registry import available, create, parameters, register
 from .saga import saga
@@ -29,6 +31,7 @@ for _name, _factory in (
     ("deepsort", deepsort),
     ("collabmot", collabmot),
     ("mutr3d", mutr3d),
+    ("polymot", polymot),
 ):
     register(_name, _factory)
 
