@@ -9,6 +9,7 @@ category-specific motion, multi-cue cost, two-stage association), and the 2D per
 ``deepsort`` and ``collabmot`` (stereo collaboration on top of them).
 """
 
+from .bytetrack import bytetrack
 from .collabmot import collabmot
 from .deepsort import deepsort
 from .errors import TrackerInputError
@@ -32,6 +33,7 @@ for _name, _factory in (
     ("collabmot", collabmot),
     ("mutr3d", mutr3d),
     ("polymot", polymot),
+    ("bytetrack", bytetrack),
 ):
     register(_name, _factory)
 
