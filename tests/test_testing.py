@@ -17,7 +17,7 @@ from simrig.testing.runs import dataset_for
 from simrig.testing.strategies import scenarios, seeds
 
 QUICK = settings(max_examples=6, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
-TRACKERS_3D = ("saga", "global_hungarian", "percam_merge", "simpletrack")
+TRACKERS_3D = ("saga", "global_hungarian", "percam_merge", "simpletrack", "mutr3d", "polymot")
 
 
 @QUICK
@@ -64,7 +64,7 @@ def test_tracking_does_not_depend_on_the_order_of_detections_within_a_frame(scen
     from simrig.pipeline.track import run_tracker as run_on_dataset
 
     dataset = dataset_for(scenario)
-    for name in ("saga", "sort"):
+    for name in ("saga", "sort", "mutr3d", "polymot", "bytetrack"):
         rows = []
         for k, wrapped in enumerate((tracker.create(name), Shuffled(tracker.create(name), 7))):
             out = run_on_dataset(dataset, wrapped, dataset.path.parent / f"order-{name}-{k}")
