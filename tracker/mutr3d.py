@@ -75,8 +75,7 @@ class Mutr3dTracker(KalmanTracker):
         """Per camera of the rig: (detection rows of that camera, (N, m) cost of every track against them),
         +inf where the track is out of that camera's view or of another class."""
         frame = self._frame
-        predicted = np.stack([track.kf.x[:9, 0] for track in self.tracks])
-        predicted = np.column_stack([predicted[:, :7], predicted[:, 7:9]])
+        predicted = np.stack([track.kf.x[:7, 0] for track in self.tracks])
         projected = project_boxes(predicted, frame.rig, frame.ego).boxes  # (C, N, 4), NaN out of view
         labels = np.array([track.label for track in self.tracks])
         out = []
