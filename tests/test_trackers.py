@@ -339,3 +339,21 @@ def test_polymot_second_stage_updates_a_track_with_a_low_score_detection_but_nev
     assert outputs[9][0].box3d.x == pytest.approx(29.0, abs=0.3) and outputs[9][0].score == pytest.approx(0.3)
     assert _run("polymot", [_frame(k, {"A": [_detection(20.0 + k, 0.0, score=0.3)]}) for k in range(3)]) == [
         [], [], []]
+
+
+def test_mutr3d_tracker_keeps_a_query_through_4_low_frames_twice_and_drops_it_at_the_5th_in_a_row():
+    def scores_run(scores):
+        frames = [_frame(k, {"A": [_detection(20.0 + k, 0.0, score=s)]}) for k, s in enumerate(scores)]
+        t = tracker.create("mutr3d")
+        t.reset(rig=RIG)
+        alive = []
+        for frame in frames:
+            t.step(frame)
+            alive.append([track.track_id for track in t.tracks])
+        return alive
+
+    low = [0.2] * 4  # matched every frame, but below τ_old = 0.35
+    survived = scores_run([0.9] + low + [0.9] + low + [0.9] * 2)
+    assert all(ids == [1] for ids in survived)
+    died = scores_run([0.9] + low + [0.2] + [0.9])
+    assert died[4] == [1] and died[5] == [] and died[6] == [2]  # gone at the 5th low frame; a new query after
