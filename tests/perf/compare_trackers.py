@@ -29,8 +29,9 @@ from simrig.pipeline.track import run_tracker
 from simrig.score import score
 
 PURE_FOTA = "saga:birth_merge_m=0,duplicate_iou=0"
-TRACKERS = ("saga", PURE_FOTA, "global_hungarian", "global_hungarian:duplicate_iou=0.3", "percam_merge",
-            "simpletrack", "mutr3d", "polymot")
+TRACKERS = ("saga", PURE_FOTA, "saga:one_per_camera=0", PURE_FOTA + ",one_per_camera=0", "global_hungarian",
+            "global_hungarian:duplicate_iou=0.3", "percam_merge", "simpletrack", "mutr3d", "polymot",
+            "polymot:coast_s=0")
 """Trackers by name, a variant as ``name:key=value,key=value`` (ablations of one rule)."""
 LABELS = {
     "saga": "saga (as shipped: FOTA, one detection per camera, birth merge, duplicate rule)",
@@ -38,6 +39,7 @@ LABELS = {
     "saga:one_per_camera=0": "saga without the per-camera constraint",
     PURE_FOTA + ",one_per_camera=0": "pure FOTA without the per-camera constraint",
     "global_hungarian:duplicate_iou=0.3": "global_hungarian + duplicate rule",
+    "polymot:coast_s=0": "polymot without reporting coasting tracks",
 }
 AVERAGED = ("AMOTA", "AMOTP", "MOTA")
 SUMMED = ("IDS", "FRAG", "MT", "ML", "TP", "FP", "FN")
