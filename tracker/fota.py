@@ -155,14 +155,20 @@ def fota(
     augmented, a, b = augmented_problem(capped, p, q, s, bound=gate)
     plan = sinkhorn(a, b, augmented, gamma, iterations)
     best = np.argmax(plan[:, :m], axis=0)
-    if cameras is None:
-        matched = best < n
-        columns = np.nonzero(matched)[0]
-        keep = allowed[best[columns], columns]
-        owner[columns[keep]] = best[columns[keep]]
-    else:
+    matched = best < n
+    columns = np.nonzero(matched)[0]
+    keep = allowed[best[columns], columns]
+    owner[columns[keep]] = best[columns[keep]]
+    if cameras is not None and _conflicts(owner, np.asarray(cameras)):
         owner = _decode_one_per_camera(plan, allowed, best, np.asarray(cameras), capped)
     return FotaResult(owner, plan, s)
+
+
+def _conflicts(owner: np.ndarray, cameras: np.ndarray) -> bool:
+    """Whether some track got two detections of one camera."""
+    taken = owner != UNMATCHED
+    pairs = owner[taken] * (int(cameras.max(initial=0)) + 1) + cameras[taken]
+    return len(np.unique(pairs)) < len(pairs)
 
 
 def _decode_one_per_camera(plan: np.ndarray, allowed: np.ndarray, best: np.ndarray, cameras: np.ndarray,

@@ -22,6 +22,7 @@ Targets (issue 5): FOTA association under 2 ms; ``saga`` at least 100 frames per
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import time
 from pathlib import Path
@@ -87,6 +88,7 @@ def main() -> None:
     parser.add_argument("--data", type=Path, default=Path("runs/compare"))
     parser.add_argument("--out", type=Path, default=Path("reports/perf/track.md"))
     args = parser.parse_args()
+    load = os.getloadavg()
 
     predicted, innovation, boxes = association_problem()
     cost_model = MahalanobisCost()
@@ -133,7 +135,9 @@ def main() -> None:
     lines = [
         "# Tracker benchmark",
         "",
-        f"Produced by `{command}` ({machine()}, numpy {np.__version__}, POT {ot.__version__}).",
+        f"Produced by `{command}` ({machine()}, numpy {np.__version__}, POT {ot.__version__}; load average "
+        f"{load[0]:.1f} on {os.cpu_count()} cores when it started — the machine is shared, so times are upper "
+        "bounds).",
         "",
         f"## Association, {n} tracks × {m} detections",
         "",
