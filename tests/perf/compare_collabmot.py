@@ -8,11 +8,12 @@ Run explicitly (not part of the test suite)::
         [--frames 200] [--data runs/collabmot] [--out reports/trackers/collabmot.md]
 
 Each (scenario, seed) dataset is generated once into ``--data``. On the same detections: each per-camera tracker
-alone (``sort``, ``deepsort``), and ``collabmot`` with every (ego, remote) pair of them, online (the default)
-and semi-online (its own rows); everything scored on the ego camera ``left`` only (``simrig score --camera
-left``). HOTA, AssA, DetA and IDF1 are averaged over the seeds, IDSW summed. The gains table shows ΔAssA and
-ΔIDF1 of every (scenario, combination) cell against the per-camera tracker CollabMOT runs on the ego camera,
-whatever their sign; the verdict counts the online cells that improve both.
+alone (``sort``, ``deepsort``, and ``bytetrack`` for reference), and ``collabmot`` with every (ego, remote)
+pair of the first two, online (the default) and semi-online (its own rows); everything scored on the ego
+camera ``left`` only (``simrig score --camera left``). HOTA, AssA, DetA and IDF1 are averaged over the seeds,
+IDSW summed. The gains table shows ΔAssA and ΔIDF1 of every (scenario, combination) cell against the
+per-camera tracker CollabMOT runs on the ego camera, whatever their sign; the verdict counts the online cells
+that improve both.
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ from simrig.score import score
 
 SCENARIOS = ("stereo_occluder", "stereo_occluder_narrow", "stereo_one_sided", "stereo_one_sided_narrow")
 SINGLE = ("sort", "deepsort")
+ALONE = ("bytetrack",)
+"""Per-camera trackers shown alone for reference (CollabMOT does not run on them)."""
 METRICS = ("HOTA", "AssA", "DetA", "IDF1")
 EGO = "left"
 
@@ -37,7 +40,7 @@ def systems() -> list[tuple[str, str, dict]]:
     """(label, tracker, params): the baselines, then CollabMOT for every (ego, remote) pair online (the
     default, the paper's per-time-step output), then the same pairs semi-online (hindsight: interpolated gap
     boxes and past frames relabelled) in their own rows."""
-    out = [(name, name, {}) for name in SINGLE]
+    out = [(name, name, {}) for name in SINGLE + ALONE]
     for semi_online in (False, True):
         for ego in SINGLE:
             for remote in SINGLE:
