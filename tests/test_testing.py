@@ -17,7 +17,7 @@ from simrig.testing.runs import dataset_for
 from simrig.testing.strategies import scenarios, seeds
 
 QUICK = settings(max_examples=6, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
-TRACKERS_3D = ("saga", "global_hungarian", "percam_merge", "simpletrack")
+TRACKERS_3D = ("saga", "global_hungarian", "percam_merge", "simpletrack", "mutr3d", "polymot")
 
 
 @QUICK
@@ -63,7 +63,7 @@ def test_tracking_does_not_depend_on_the_order_of_detections_within_a_frame(scen
     from simrig.pipeline.track import run_tracker as run_on_dataset
 
     dataset = dataset_for(scenario)
-    for name in ("saga", "sort"):
+    for name in ("saga", "sort", "mutr3d", "polymot", "bytetrack"):
         rows = []
         for k, wrapped in enumerate((tracker.create(name), Shuffled(tracker.create(name), 7))):
             out = run_on_dataset(dataset, wrapped, dataset.path.parent / f"order-{name}-{k}")
@@ -193,7 +193,7 @@ def plugin_project(python: str, project, env: dict) -> None:
     assert replay.tracker == "broken_tracker:DropsAfterOcclusion" and "recall below one half" in replay.failure
     recorded = replay.scores["2d"]
     assert recorded["CLR_TP"] < recorded["CLR_TP"] + recorded["CLR_FN"]  # the failing run's own numbers
-    assert replay.scenario.frames <= 4 and len(replay.scenario.perturbations) <= 1  # shrunk from up to 12 and 2
+    assert replay.scenario.frames <= 6 and len(replay.scenario.perturbations) <= 1  # shrunk from up to 12 and 2
     refused = subprocess.run([python, "-m", "simrig.cli", "replay", str(replay_file)], cwd=project, env=env,
                              capture_output=True, text=True, timeout=300)
     assert refused.returncode == 2 and "--trust-file" in refused.stderr and refused.stderr.count("\n") == 1
