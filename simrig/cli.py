@@ -93,7 +93,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from simrig.figures.mosaic import render_mosaic
 
     out = args.out or Path(args.dataset) / f"mosaic_{args.frame:06d}.png"
-    print(render_mosaic(args.dataset, args.frame, out))
+    print(render_mosaic(args.dataset, args.frame, out, tracks=args.tracks))
     return 0
 
 
@@ -122,7 +122,7 @@ def _cmd_score(args: argparse.Namespace) -> int:
     from .scoring import score
 
     report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera,
-                   evaluation=evaluation_overrides(args.evaluation))
+                   evaluation=evaluation_overrides(args.evaluation), fmt=args.format)
     print(report.table())
     if args.json is not None:
         report.write_json(args.json)
@@ -259,11 +259,17 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("dataset", type=Path)
     render.add_argument("--frame", type=_int_at_least(0), required=True, help="frame index")
     render.add_argument("--out", type=Path, default=None, help="PNG path (default: DIR/mosaic_FRAME.png)")
+    render.add_argument("--tracks", type=Path, default=None,
+                        help="also draw a tracker's boxes (a tracks folder or file, any format 'score' reads)")
     render.set_defaults(run=_cmd_render)
 
     scorer = commands.add_parser("score", help="score a tracker's output (tracks folder or file) on a dataset")
     scorer.add_argument("dataset", type=Path)
-    scorer.add_argument("tracks", type=Path, help="folder with tracks3d.parquet / tracks2d.parquet, or one file")
+    scorer.add_argument("tracks", type=Path, help="folder with tracks3d.parquet / tracks2d.parquet, or one file; "
+                        "or MOTChallenge, KITTI or nuScenes files (see --format)")
+    scorer.add_argument("--format", default=None, choices=("simrig", "motchallenge", "kitti", "nuscenes"),
+                        help="the tracks' format (default: detected; MOTChallenge/KITTI: CAMERA.txt files or an "
+                             "export folder; nuScenes: a results .json)")
     scorer.add_argument("--json", type=Path, default=None, help="also write every metric as JSON here")
     scorer.add_argument("--errors", type=Path, default=None,
                         help="also write every FN / IDS / FRAG with its causes as Parquet here")
