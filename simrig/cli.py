@@ -97,6 +97,14 @@ def _cmd_render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_view(args: argparse.Namespace) -> int:
+    from simrig.figures.viewer import log_run
+
+    saved = log_run(args.run_dir, save=args.save)
+    print(f"wrote     {saved}" if saved is not None else "logged to a rerun viewer")
+    return 0
+
+
 def _cmd_replay(args: argparse.Namespace) -> int:
     from .testing.replay import replay
 
@@ -262,6 +270,12 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--tracks", type=Path, default=None,
                         help="also draw a tracker's boxes (a tracks folder or file, any format 'score' reads)")
     render.set_defaults(run=_cmd_render)
+
+    view = commands.add_parser("view", help="look at a run frame by frame in rerun (the 'view' extra)")
+    view.add_argument("run_dir", type=Path, help="a folder 'simrig run' wrote (or a dataset folder)")
+    view.add_argument("--save", type=Path, default=None, metavar="FILE.rrd",
+                      help="write a rerun recording here instead of opening the viewer")
+    view.set_defaults(run=_cmd_view)
 
     scorer = commands.add_parser("score", help="score a tracker's output (tracks folder or file) on a dataset")
     scorer.add_argument("dataset", type=Path)
