@@ -170,7 +170,12 @@ def _params(pairs: list[tuple[str, object]] | None) -> dict[str, object]:
 def _cmd_track(args: argparse.Namespace) -> int:
     from simrig.pipeline.track import run_tracker
 
-    result = run_tracker(args.dataset, args.tracker, args.out, _params(args.param))
+    from .dataset import Dataset
+
+    dataset = Dataset.open(args.dataset)
+    if args.images and dataset.image_folder is None:
+        raise SimrigError(f"--images: {args.dataset} has no images (generate it with --images)")
+    result = run_tracker(dataset, args.tracker, args.out, _params(args.param))
     print(
         f"tracked   {result.frames} frames with {args.tracker}: {result.track_rows} track rows, "
         f"{result.frames_per_second:.0f} frames/s in step()"
@@ -199,6 +204,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     result = run_pipeline(
         args.scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=args.out,
         frames=args.frames, overwrite=args.overwrite, progress=not args.quiet, camera=args.camera,
+        images=args.images,
     )
     print(result.report.table())
     print(f"\ntracked   {result.tracking.frames} frames with {args.tracker} "
@@ -318,6 +324,8 @@ def build_parser() -> argparse.ArgumentParser:
     track.add_argument("dataset", type=Path)
     _tracker_arguments(track)
     track.add_argument("--out", type=Path, required=True, help="tracks folder to write")
+    track.add_argument("--images", action="store_true",
+                       help="the tracker needs images: fail unless the dataset has them (SensorFrame.images)")
     track.set_defaults(run=_cmd_track)
 
     trackers = commands.add_parser("trackers", help="list the registered trackers and their parameters")
@@ -351,6 +359,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="output folder (default: runs/SCENARIO-seedSEED); holds dataset/, tracks/, report.md")
     run.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in OUT/dataset")
     run.add_argument("--camera", default=None, metavar="NAME", help="score only this camera, in 2D")
+    run.add_argument("--images", action="store_true",
+                     help="also render a PNG per camera and frame (slow); the tracker gets their paths in "
+                          "SensorFrame.images")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(run=_cmd_run)
     return parser
