@@ -377,7 +377,7 @@ def _scenario_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _tracker_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tracker", default="saga", help="registered tracker name (default: saga; see "
-                        "'simrig trackers')")
+                        "'simrig trackers'), or module:attribute — a tracker factory or class to import")
     parser.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
                         help="a tracker parameter, repeatable (e.g. --param gate=4 --param life=mutr3d)")
 
