@@ -124,3 +124,38 @@ def test_bad_files_get_one_line_naming_file_and_line(small_dataset, tmp_path, ca
     err = _error_line(capsys, ["score", str(small_dataset.path), str(plain.parent)])
     assert "carry no class" in err and "classes=any" in err
     assert main(["score", str(small_dataset.path), str(plain.parent), "--evaluation", "classes=any"]) == 0
+
+
+def test_layouts_and_ids_without_a_dataset(tmp_path):
+    """Detection of each layout, KITTI types and DontCare, nuScenes string ids and yaw, on hand-written files."""
+    from simrig.dataset.tracks_formats import detect_format, read_tracks_as
+
+    cameras = ("left", "right")
+    kitti = tmp_path / "kitti"
+    kitti.mkdir()
+    (kitti / "left.txt").write_text(
+        "0 7 Van 0 0 -10 10 20 30 50 -1 -1 -1 -1000 -1000 -1000 -10 0.5\n"
+        "0 -1 DontCare -1 -1 -10 0 0 5 5 -1 -1 -1 -1000 -1000 -1000 -10 1\n"
+        "1 8 Pedestrian 0 0 -10 10 20 30 50 -1 -1 -1 -1000 -1000 -1000 -10 0.5\n")
+    assert detect_format(kitti, cameras) == "kitti"
+    rows = read_tracks_as(kitti, frame_count=2, cameras=cameras).tracks2d
+    assert rows.track_id.tolist() == [7] and rows.label.tolist() == ["car"]
+    assert rows.boxes.tolist() == [[10, 20, 30, 50]] and rows.score.tolist() == [0.5]
+
+    mot = tmp_path / "mot"
+    mot.mkdir()
+    (mot / "right-truck.txt").write_text("2,3,10.5,20,4,5,0.75,-1,-1,-1\n")
+    assert detect_format(mot, cameras) == "motchallenge"
+    rows = read_tracks_as(mot, frame_count=2, cameras=cameras).tracks2d
+    assert (rows.frame.tolist(), rows.camera.tolist(), rows.label.tolist()) == ([1], ["right"], ["truck"])
+    assert rows.boxes.tolist() == [[10.5, 20, 14.5, 25]]
+
+    yaw = 2.0
+    box = {"translation": [1, 2, 3], "size": [2, 5, 1.5], "rotation": [np.cos(yaw / 2), 0, 0, np.sin(yaw / 2)],
+           "velocity": [1, 0], "tracking_name": "car", "tracking_score": 0.5}
+    nu = tmp_path / "r.json"
+    nu.write_text(json.dumps({"results": {"s0": [{**box, "tracking_id": "b"}, {**box, "tracking_id": "a"}],
+                                          "s1": [{**box, "tracking_id": "x", "tracking_name": "pedestrian"}]}}))
+    rows = read_tracks_as(nu, frame_count=2, cameras=cameras, tokens={"s0": 0, "s1": 1}).tracks3d
+    assert sorted(rows.track_id.tolist()) == [0, 1]  # "a", "b" numbered in sorted order; the pedestrian left out
+    assert rows.boxes[0, :7].tolist() == pytest.approx([1, 2, 3, 5, 2, 1.5, yaw])
