@@ -57,3 +57,12 @@ def test_view_without_rerun_says_how_to_install_it(tmp_path, capsys, monkeypatch
     assert main(["view", str(tmp_path), "--save", str(tmp_path / "v.rrd")]) == 2
     err = capsys.readouterr().err
     assert err == "simrig: error: the viewer needs rerun-sdk: pip install 'simrig[view]' (or pip install rerun-sdk)\n"
+
+
+def test_view_without_a_display_says_to_save(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr(sys, "platform", "linux")
+    assert main(["view", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "pass --save FILE.rrd" in err

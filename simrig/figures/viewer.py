@@ -25,6 +25,8 @@ dataset folder is logged without tracks or events. rerun-sdk is an optional extr
 
 from __future__ import annotations
 
+import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +39,11 @@ from .mosaic import CLUTTER_COLOUR, identity_colour, track_colour
 
 ERROR_KINDS = ("FN", "IDS", "FRAG")
 INSTALL_HINT = "the viewer needs rerun-sdk: pip install 'simrig[view]' (or pip install rerun-sdk)"
+
+
+def has_display() -> bool:
+    """Whether a viewer window can open here (on Linux: an X11 or Wayland display is set)."""
+    return not sys.platform.startswith("linux") or bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 class ViewerError(SimrigError):
@@ -85,6 +92,9 @@ def log_run(folder: Path | str, *, save: Path | str | None = None, spawn: bool =
     """Log the run (or dataset) at ``folder`` to rerun: to the file ``save`` (an ``.rrd``), else to a viewer
     spawned now (``spawn``). Returns ``save``."""
     rr = _rerun()
+    if save is None and spawn and not has_display():
+        raise ViewerError("no display to open the rerun viewer on (DISPLAY and WAYLAND_DISPLAY are unset): pass "
+                          "--save FILE.rrd and open it with 'rerun FILE.rrd' where there is one")
     dataset_path, tracks_path, errors_path = run_parts(Path(folder))
     dataset = Dataset.open(dataset_path)
     truth = dataset.ground_truth
