@@ -203,12 +203,20 @@ class Dataset:
                 events=truth.events[position],
             )
 
+    @property
+    def image_folder(self) -> Path | None:
+        """The dataset's ``images/`` folder (one PNG per camera and frame), or ``None`` without images."""
+        folder = self.path / "images"
+        return folder if folder.is_dir() else None
+
     def sensor_frames(self) -> Iterator[SensorFrame]:
         """What a tracker sees, frame by frame: a :class:`SensorFrame` per frame that was not dropped (a
         dropped frame is skipped, so the tracker sees the time jump). No ground truth is in it.
 
         The frames carry their detections as arrays (rows sorted by camera in rig order, as written);
-        ``frame.detections`` builds :class:`~simrig.types.Detection` objects only if asked."""
+        ``frame.detections`` builds :class:`~simrig.types.Detection` objects only if asked. When the dataset
+        has images (generated with ``--images``), ``frame.images`` maps each camera to the path of its PNG for
+        that frame (``images/CAMERA/FFFFFF.png``, RGB, the camera's width × height); empty otherwise."""
         frames = self.table("frames")
         dropped = frames.column("dropped").to_numpy(zero_copy_only=False)
         table = self.table("detections")
@@ -224,6 +232,7 @@ class Dataset:
         label_codes = {label.value: code for code, label in enumerate(LABELS)}
         label_index = np.array([label_codes[label] for label in labels], dtype=np.int64)
         embeddings = _embedding_matrix(table.column("embedding"))
+        images = self.image_folder
         for row, (frame, timestamp, pose) in enumerate(self._ego_rows()):
             if dropped[row]:
                 continue
@@ -237,6 +246,8 @@ class Dataset:
                     boxes3d[lo:hi], boxes2d[lo:hi], scores[lo:hi], label_index[lo:hi], camera_index[lo:hi],
                     embeddings[lo:hi],
                 ),
+                images={} if images is None else {name: str(images / name / f"{frame:06d}.png")
+                                                  for name in rig.camera_names},
             )
 
     def summary(self) -> str:

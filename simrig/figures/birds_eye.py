@@ -72,7 +72,8 @@ def plot_bev(dataset: Dataset, tracks3d: pa.Table | None, switches: list[tuple[i
     axis.set_ylabel("world y [m]")
     axis.set_title(title + ("" if equal else " (axes not to scale)"), fontsize=10)
     axis.plot([], [], color="0.55", linewidth=2.4, alpha=0.5, label="ground truth")
-    axis.plot([], [], color="tab:blue", linewidth=0.9, label="tracks (a colour per id)")
+    axis.plot([], [], color="tab:blue", linewidth=0.9, linestyle="-" if tracks3d is not None else "none",
+              label="tracks (a colour per id)" if tracks3d is not None else "no 3D tracks (a 2D tracker)")
     axis.legend(fontsize=8, loc="upper left")
     figure.tight_layout()
     figure.savefig(out)

@@ -118,7 +118,7 @@ def _worst_section(bench: BenchResults, out: Path) -> list[str]:
              "and `simrig score` the tracks to see every error.", "",
              f"![bird's-eye view of the worst cell]({worst.bev.name})", "",
              f"Camera mosaic at frame {worst.mosaic_frame} (the first switch): solid boxes ground truth, dashed "
-             "boxes detections.", "",
+             "boxes detections, dotted boxes the tracker's (`T<id>`).", "",
              f"![camera mosaic of the worst cell]({worst.mosaic.name})", ""]
     if worst.switches:
         rows = [[str(number), str(s["frame"]), s["camera"] or "-", s["class"], str(s["actor_id"]),

@@ -85,6 +85,6 @@ def inspect_worst(bench: BenchResults, out: Path) -> WorstCell:
                  else "") + f": {entry['name']}, {len(switches)} identity switches")
         bev = plot_bev(dataset, tracks3d, numbered, title, out / "worst-bev.png")
         frame = int(switches["frame"].min()) if len(switches) else dataset.frame_count // 2
-        mosaic = render_mosaic(dataset.path, frame, out / "worst-mosaic.png")
+        mosaic = render_mosaic(dataset.path, frame, out / "worst-mosaic.png", tracks=run.out)
     listed = switches[["frame", "camera", "class", "actor_id", "previous_track_id", "track_id", "causes"]]
     return WorstCell(row, listed.to_dict("records"), bev, mosaic, frame)

@@ -7,7 +7,9 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from simrig.dataset.tracks_file import TrackSet, read_tracks
+from simrig.dataset.tracks_file import TrackSet
+from simrig.dataset.tracks_formats import read_tracks_as
+from simrig.dataset.tracks_nuscenes import sample_token
 from simrig.scenarios.evaluation_schema import EvaluationConfig
 from simrig.scoring.results import METRICS_2D, METRICS_3D, ScoreReport
 
@@ -34,8 +36,11 @@ UNITS_2D = (HOTA(), _CLEAR, Identity())
 
 def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookback_s: float = LOOKBACK_S,
           camera: str | None = None, truth: GroundTruth | None = None,
-          evaluation: EvaluationConfig | dict | None = None) -> ScoreReport:
+          evaluation: EvaluationConfig | dict | None = None, fmt: str | None = None) -> ScoreReport:
     """Score ``tracks`` (a tracks folder or file, or a read :class:`TrackSet`) against ``dataset``.
+
+    ``fmt``: the tracks' format — ``simrig``, ``motchallenge``, ``kitti`` or ``nuscenes``
+    (:mod:`simrig.dataset.tracks_formats`); detected from the path when ``None``.
 
     With ``camera``, only that camera is scored, in 2D (a 2D tracker's own boxes there, or a 3D tracker's
     projected into it) against the actors in its view, and the 3D metrics are left out: how a per-camera
@@ -54,7 +59,9 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     config = evaluation_of(dataset.scenario, evaluation)
     truth = dataset.ground_truth if truth is None else truth
     if not isinstance(tracks, TrackSet):
-        tracks = read_tracks(tracks, frame_count=len(truth.frames), cameras=truth.rig.camera_names)
+        tokens = {sample_token(dataset.scenario["name"], dataset.seed, f): int(f) for f in truth.frames}
+        tracks = read_tracks_as(tracks, fmt, frame_count=len(truth.frames), cameras=truth.rig.camera_names,
+                                tokens=tokens, classes=config.classes)
     lookback = int(round(lookback_s * float(dataset.scenario["frame_rate_hz"])))
     errors = []
     metrics3d = None
