@@ -11,6 +11,7 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from .base import FiniteFloat, NonNegativeFloat, PositiveFloat, Strict, set_keys
+from .evaluation_schema import EvaluationConfig
 from .perturbation_schema import Perturbation
 from .sensor_schema import RenderConfig, SensorConfig
 
@@ -157,6 +158,9 @@ class Scenario(Strict):
     sensor: SensorConfig = Field(default_factory=SensorConfig)
     perturbations: tuple[Perturbation, ...] = ()
     """Scheduled perturbations (:mod:`scenarios.perturbation_schema`), applied in the order given."""
+    evaluation: EvaluationConfig = Field(default_factory=EvaluationConfig)
+    """Which 2D ground truth is scored (:mod:`scenarios.evaluation_schema`); changes no dataset byte but the
+    resolved scenario stored with it."""
 
     @property
     def frame_period_s(self) -> float:

@@ -130,7 +130,15 @@ def _cmd_render(args: argparse.Namespace) -> int:
     if out.resolve().parent == dataset.path.resolve() and (
             out.name == MANIFEST_NAME or out.name in {entry["file"] for entry in dataset.manifest["files"].values()}):
         raise SimrigError(f"--out {str(out)!r} is one of the dataset's own files; write elsewhere")
-    print(render_mosaic(dataset.path, args.frame, out))
+    print(render_mosaic(dataset.path, args.frame, out, tracks=args.tracks))
+    return 0
+
+
+def _cmd_view(args: argparse.Namespace) -> int:
+    from simrig.figures.viewer import log_run
+
+    saved = log_run(args.run_dir, tracker=args.tracker, save=args.save)
+    print(f"wrote     {saved}" if saved is not None else "logged to a rerun viewer")
     return 0
 
 
@@ -147,19 +155,23 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
+    from .dataset.evaluation import evaluation_overrides
     from .export import export
 
-    out = export(args.dataset, args.format, args.out, tracks=args.tracks, overwrite=args.overwrite)
+    out = export(args.dataset, args.format, args.out, tracks=args.tracks, overwrite=args.overwrite,
+                 evaluation=evaluation_overrides(args.evaluation))
     print(f"wrote {out} ({args.format})")
     return 0
 
 
 def _cmd_score(args: argparse.Namespace) -> int:
+    from .dataset.evaluation import evaluation_overrides
     from .scoring import score
 
     for option in ("json", "errors"):
         _output(getattr(args, option), f"--{option}", inputs=(args.dataset, args.tracks), folder=False)
-    report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera)
+    report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera,
+                   evaluation=evaluation_overrides(args.evaluation), fmt=args.format)
     print(report.table())
     if args.json is not None:
         args.json.parent.mkdir(parents=True, exist_ok=True)
@@ -204,8 +216,13 @@ def _params(pairs: list[tuple[str, object]] | None) -> dict[str, object]:
 def _cmd_track(args: argparse.Namespace) -> int:
     from simrig.pipeline.track import run_tracker
 
+    from .dataset import Dataset
+
     _output(args.out, "--out", inputs=(args.dataset,))
-    result = run_tracker(args.dataset, args.tracker, args.out, _params(args.param),
+    dataset = Dataset.open(args.dataset)
+    if args.images and dataset.image_folder is None:
+        raise SimrigError(f"--images: {args.dataset} has no images (generate it with --images)")
+    result = run_tracker(dataset, args.tracker, args.out, _params(args.param),
                          frame_time_limit_s=args.frame_time_limit)
     print(
         f"tracked   {result.frames} frames with {args.tracker}: {result.track_rows} track rows, "
@@ -239,6 +256,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         args.scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=args.out,
         frames=args.frames, overwrite=args.overwrite, progress=not args.quiet, camera=args.camera,
         frame_time_limit_s=args.frame_time_limit,
+        images=args.images,
     )
     manifest = Dataset.open(result.dataset).manifest
     if result.reused:
@@ -319,11 +337,25 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("dataset", type=Path)
     render.add_argument("--frame", type=_int_at_least(0), required=True, help="frame index")
     render.add_argument("--out", type=Path, default=None, help="PNG path (default: DIR/mosaic_FRAME.png)")
+    render.add_argument("--tracks", type=Path, default=None,
+                        help="also draw a tracker's boxes (a tracks folder or file, any format 'score' reads)")
     render.set_defaults(run=_cmd_render)
+
+    view = commands.add_parser("view", help="look at a run frame by frame in rerun (the 'view' extra)")
+    view.add_argument("run_dir", type=Path, help="a folder 'simrig run' wrote (or a dataset folder)")
+    view.add_argument("--save", type=Path, default=None, metavar="FILE.rrd",
+                      help="write a rerun recording here instead of opening the viewer")
+    view.add_argument("--tracker", default=None, metavar="LABEL",
+                      help="which run of RUN_DIR/tracks/ to show when it holds several")
+    view.set_defaults(run=_cmd_view)
 
     scorer = commands.add_parser("score", help="score a tracker's output (tracks folder or file) on a dataset")
     scorer.add_argument("dataset", type=Path)
-    scorer.add_argument("tracks", type=Path, help="folder with tracks3d.parquet / tracks2d.parquet, or one file")
+    scorer.add_argument("tracks", type=Path, help="folder with tracks3d.parquet / tracks2d.parquet, or one file; "
+                        "or MOTChallenge, KITTI or nuScenes files (see --format)")
+    scorer.add_argument("--format", default=None, choices=("simrig", "motchallenge", "kitti", "nuscenes"),
+                        help="the tracks' format (default: detected; MOTChallenge/KITTI: CAMERA.txt files or an "
+                             "export folder; nuScenes: a results .json)")
     scorer.add_argument("--json", type=Path, default=None, help="also write every metric as JSON here")
     scorer.add_argument("--errors", type=Path, default=None,
                         help="also write every FN / IDS / FRAG with its causes as Parquet here")
@@ -331,6 +363,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="[s] an ID switch is also tagged with the causes this long before it (default 1)")
     scorer.add_argument("--camera", default=None, metavar="NAME",
                         help="score only this camera, in 2D (e.g. a stereo pair's ego camera 'left')")
+    scorer.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                        help="an [evaluation] key on top of the dataset's (e.g. min_height_px=40, range_m.car=60, "
+                             "ignore=false, classes=any); repeatable")
     scorer.set_defaults(run=_cmd_score)
 
     replay = commands.add_parser("replay", help="rerun a replay file (a failing test's scenario) and compare")
@@ -348,12 +383,16 @@ def build_parser() -> argparse.ArgumentParser:
     exporter.add_argument("--tracks", type=Path, default=None, help="a tracks folder or file to export too")
     exporter.add_argument("--out", type=Path, required=True, help="folder to write (must not exist)")
     exporter.add_argument("--overwrite", action="store_true", help="replace OUT if it exists")
+    exporter.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                          help="an [evaluation] key, as for score: the ignored ground truth is written as distractors")
     exporter.set_defaults(run=_cmd_export)
 
     track = commands.add_parser("track", help="run a registered tracker over a dataset and write its tracks")
     track.add_argument("dataset", type=Path)
     _tracker_arguments(track)
     track.add_argument("--out", type=Path, required=True, help="tracks folder to write")
+    track.add_argument("--images", action="store_true",
+                       help="the tracker needs images: fail unless the dataset has them (SensorFrame.images)")
     track.set_defaults(run=_cmd_track)
 
     trackers = commands.add_parser("trackers", help="list the registered trackers and their parameters")
@@ -388,6 +427,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="output folder (default: runs/SCENARIO-seedSEED); holds dataset/, tracks/, report.md")
     run.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in OUT/dataset")
     run.add_argument("--camera", default=None, metavar="NAME", help="score only this camera, in 2D")
+    run.add_argument("--images", action="store_true",
+                     help="also render a PNG per camera and frame (slow); the tracker gets their paths in "
+                          "SensorFrame.images")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(run=_cmd_run)
     return parser
@@ -409,7 +451,7 @@ def _scenario_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _tracker_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tracker", default="saga", help="registered tracker name (default: saga; see "
-                        "'simrig trackers')")
+                        "'simrig trackers'), or module:attribute — a tracker factory or class to import")
     parser.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
                         help="a tracker parameter, repeatable (e.g. --param gate=4 --param life=mutr3d)")
     parser.add_argument("--frame-time-limit", type=_non_negative_float, default=60.0, metavar="SECONDS",

@@ -207,3 +207,34 @@ def test_a_second_bench_in_the_same_folder_stops_at_once(tmp_path):
     with folder_lock(out), pytest.raises(BenchError, match="is in use by another simrig bench"):
         run_bench(_tiny(tmp_path / "suite"), out=out, workers=1)
     assert not (out / "fragments").exists()
+
+
+def test_a_2d_tracker_first_is_reported_under_a_2d_heading_with_its_real_switches(tmp_path):
+    """A suite whose first tracker is `deepsort` with no camera, then `saga`: the bench labels deepsort
+    `scored = 2d` with the 2D IDSW of a direct score, the report lists it under a 2D heading, chooses its
+    worst cell by 2D switches, and has per-camera tables."""
+    folder = tmp_path / "suite"
+    folder.mkdir()
+    (folder / "tiny_scenario.toml").write_text(TINY_SCENARIO.replace("frames = 25", "frames = 15"))
+    (folder / "mixed.toml").write_text('name = "mixed"\nscenarios = ["tiny_scenario.toml"]\nseeds = [0]\n'
+                                       '[[trackers]]\ntracker = "deepsort"\n[[trackers]]\ntracker = "saga"\n'
+                                       '[[sweeps]]\nparameter = "miss_probability"\nvalues = [0.3]\n')
+    run = run_bench(folder / "mixed.toml", out=tmp_path / "bench", workers=1, progress=False)
+    rows = pq.read_table(run.results).to_pandas()
+    assert set(rows.loc[rows["tracker"] == "deepsort", "scored"]) == {"2d"}
+    assert set(rows.loc[rows["tracker"] == "saga", "scored"]) == {"3d"}
+    base = rows[(rows["tracker"] == "deepsort") & (rows["sweep"] == "")].iloc[0]
+    dataset = generate(load_scenario(folder / "tiny_scenario.toml"), seed=0, out=tmp_path / "d",
+                       progress=False).path
+    direct = score(dataset, run_tracker(dataset, "deepsort", tmp_path / "t", seed=0).out)
+    assert direct.metrics3d is None and base["2d_IDSW"] == direct.metrics2d["overall"]["IDSW"]
+    cameras = pq.read_table(run.out / "cameras.parquet").to_pandas()
+    mine = cameras[(cameras["tracker"] == "deepsort") & (cameras["sweep"] == "")]
+    assert {camera: values["IDSW"] for camera, values in direct.metrics2d["per_camera"].items()} == dict(
+        zip(mine["camera"], mine["IDSW"], strict=True))
+    text = write_report(run.out, out=tmp_path / "report").read_text()
+    assert "### 2D trackers, scored in 2D over every camera" in text and "### 3D trackers" in text
+    section = text.split("### 2D trackers")[1].split("###")[0]
+    assert f"| `deepsort` | 1 | 1 | {base['2d_HOTA']:.3f} |" in section and "| `saga`" not in section
+    assert "Per camera: 2D HOTA" in section and "`CAM_FRONT`" in section
+    assert "The cell where `deepsort`" in text

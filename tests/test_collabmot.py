@@ -1,4 +1,5 @@
-"""CollabMOT (seed 002), step by step on hand-built tracklets, then end to end on a hand-built stereo scene."""
+"""CollabMOT (Ninh and Kim, IEEE Access 2024), step by step on hand-built tracklets, then end to end on a
+hand-built stereo scene."""
 
 import numpy as np
 import pytest
@@ -190,7 +191,7 @@ def left_ids(outputs):
     return {f: {round(t.boxes2d["left"].x1): t.track_id for t in tracks} for f, tracks in outputs}
 
 
-def test_collabmot_repairs_the_ego_cameras_identity_switch_and_fills_the_gap():
+def test_semi_online_collabmot_repairs_the_ego_cameras_identity_switch_and_fills_the_gap():
     scene = stereo_scene()
     sort = tracker.create("sort", cameras="left")
     sort.reset(rig=STEREO)
@@ -198,7 +199,7 @@ def test_collabmot_repairs_the_ego_cameras_identity_switch_and_fills_the_gap():
     car0 = lambda tracks: [t.track_id for t in tracks if t.boxes2d["left"].x1 > 500]  # noqa: E731
     assert car0(plain[5][1]) != car0(plain[20][1])  # SORT alone: a new id after the miss
 
-    collab = tracker.create("collabmot")
+    collab = tracker.create("collabmot", semi_online=True)
     collab.reset(rig=STEREO)
     for f in scene:
         collab.step(f)
@@ -212,8 +213,35 @@ def test_collabmot_repairs_the_ego_cameras_identity_switch_and_fills_the_gap():
     assert len(other) == 1 and other.isdisjoint({ids[0][0]})
 
 
+def test_online_collabmot_repairs_the_switch_at_each_time_step_and_never_revises_the_past():
+    scene = stereo_scene()
+    collab = tracker.create("collabmot")
+    assert not hasattr(collab, "finish")  # online: what step returned is the answer
+    collab.reset(rig=STEREO)
+    online = [(f.frame, collab.step(f)) for f in scene]
+    car0 = {f: [t.track_id for t in tracks if t.boxes2d["left"].x1 > 500] for f, tracks in online}
+    assert all(car0[f] == [] for f in range(8, 11))  # missed, and no interpolated box from the future
+    assert car0[7] == car0[20] and len(car0[20]) == 1  # the new SORT track took the car's global id
+
+    semi = tracker.create("collabmot", semi_online=True)
+    semi.reset(rig=STEREO)
+    stepped = [(f.frame, semi.step(f)) for f in scene]
+    assert left_ids(stepped) == left_ids(online)  # the two differ only in what finish() revises
+
+
+def test_a_pair_that_eq_6_gives_a_new_id_does_not_reuse_the_ego_tracklets_old_one():
+    # The ego tracklet had global id 4 through a link that the round revokes (its old partner coexists with
+    # the new one and cost more); neither side then has an id, so Eq. 6 says: a new one.
+    old_partner = tracklet("remote", 1, range(0, 10), global_id=4, min_cost=0.08)
+    e = tracklet("ego", 1, range(0, 10), global_id=4, min_cost=0.08)
+    r = tracklet("remote", 2, range(0, 10))
+    associate([e], [r], np.array([[0.02]]), ego_all=[e], remote_all=[old_partner, r], limit=0.1,
+              new_id=counter(100))
+    assert e.global_id == r.global_id == 100 and old_partner.global_id == NO_ID
+
+
 def test_collabmot_without_interpolation_leaves_the_gap_and_keeps_the_repair():
-    collab = tracker.create("collabmot", interpolate=False)
+    collab = tracker.create("collabmot", interpolate=False, semi_online=True)
     collab.reset(rig=STEREO)
     for f in stereo_scene():
         collab.step(f)

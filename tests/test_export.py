@@ -4,18 +4,24 @@ nuScenes files hold what the dataset holds; an export is all or nothing."""
 import json
 
 import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
 import pytest
 import trackeval
 
 from simrig.cli import main
+from simrig.dataset.ground_truth import load_ground_truth
 from simrig.export import api as export_api
 from simrig.export import export
 from simrig.pipeline.track import run_tracker
 from simrig.scoring import score
-from simrig.scoring.ground_truth import load_ground_truth
+
+COMPARED = ("HOTA", "DetA", "AssA", "MOTA", "IDSW", "IDF1")
 
 
 def trackeval_on(out, tracker_name):
+    """TrackEval's MotChallenge2DBox on an export: (combined values, values per camera), each camera's
+    sequences combined by TrackEval's own ``combine_sequences``."""
     config = trackeval.Evaluator.get_default_eval_config()
     config.update(PRINT_RESULTS=False, PRINT_CONFIG=False, OUTPUT_SUMMARY=False, OUTPUT_DETAILED=False,
                   PLOT_CURVES=False, TIME_PROGRESS=False, DISPLAY_LESS_PROGRESS=True, USE_PARALLEL=False)
@@ -25,34 +31,105 @@ def trackeval_on(out, tracker_name):
     metrics = [trackeval.metrics.HOTA(), trackeval.metrics.CLEAR({"PRINT_CONFIG": False}),
                trackeval.metrics.Identity({"PRINT_CONFIG": False})]
     results, _ = trackeval.Evaluator(config).evaluate([dataset], metrics)
-    combined = results["MotChallenge2DBox"][tracker_name]["COMBINED_SEQ"]["pedestrian"]
-    return {"HOTA": float(np.mean(combined["HOTA"]["HOTA"])), "MOTA": float(combined["CLEAR"]["MOTA"]),
-            "IDF1": float(combined["Identity"]["IDF1"]), "IDSW": float(combined["CLEAR"]["IDSW"])}
+    per_sequence = results["MotChallenge2DBox"][tracker_name]
+
+    def values(result):
+        return {"HOTA": float(np.mean(result["HOTA"]["HOTA"])), "DetA": float(np.mean(result["HOTA"]["DetA"])),
+                "AssA": float(np.mean(result["HOTA"]["AssA"])), "MOTA": float(result["CLEAR"]["MOTA"]),
+                "IDSW": float(result["CLEAR"]["IDSW"]), "IDF1": float(result["Identity"]["IDF1"])}
+
+    cameras = {}
+    for name in per_sequence:
+        if name != "COMBINED_SEQ":
+            cameras.setdefault(name.rsplit("-", 1)[0], []).append(name)
+    per_camera = {}
+    for camera, names in cameras.items():
+        combined = {metric.get_name(): metric.combine_sequences({n: per_sequence[n]["pedestrian"][metric.get_name()]
+                                                                 for n in names}) for metric in metrics}
+        per_camera[camera] = values(combined)
+    return values(per_sequence["COMBINED_SEQ"]["pedestrian"]), per_camera
+
+
+def assert_equal_to_trackeval(report, theirs):
+    combined, per_camera = theirs
+    for name in COMPARED:
+        assert report.metrics2d["overall"][name] == pytest.approx(combined[name], abs=1e-9), name
+    for camera, values in per_camera.items():
+        for name in COMPARED:
+            assert report.metrics2d["per_camera"][camera][name] == pytest.approx(values[name], abs=1e-9), \
+                (camera, name)
 
 
 @pytest.mark.parametrize("tracker_name", ["sort", "saga"])
 def test_trackeval_on_the_motchallenge_export_equals_simrig_score(small_dataset, tmp_path, tracker_name):
-    """2D tracks as written, and 3D tracks projected through the rig as the scorer projects them."""
+    """2D tracks as written, and 3D tracks projected through the rig as the scorer projects them; ignored ground
+    truth written as MOTChallenge distractors, so TrackEval's preprocessing ignores what simrig ignores."""
     run = run_tracker(small_dataset, tracker_name, tmp_path / tracker_name)
     out = export(small_dataset, "motchallenge", tmp_path / "mot", tracks=run.out)
-    theirs = trackeval_on(out, tracker_name)
-    ours = score(small_dataset, run.out).metrics2d["overall"]
-    for name in ("HOTA", "MOTA", "IDF1", "IDSW"):
-        assert ours[name] == pytest.approx(theirs[name], abs=1e-9), name
+    report = score(small_dataset, run.out)
+    assert report.metrics2d["ground_truth"]["overall"]["ignored"] > 0
+    assert_equal_to_trackeval(report, trackeval_on(out, tracker_name))
 
 
-def test_kitti_labels_hold_every_box_in_view_with_the_projected_depth(small_dataset, tmp_path):
+@pytest.mark.parametrize("settings", [{}, {"classes": "any", "min_height_px": 40}])
+def test_trackeval_equals_simrig_with_tracker_boxes_on_ignored_boxes(small_dataset, tmp_path, settings):
+    """Hand-built 2D tracks on a generated dataset: every scored box tracked with jitter and an id swap, a box
+    exactly on every other ignored box and one shifted to IoU 0.6 on the rest (where boxes overlap, the
+    preprocessing's Hungarian decides which ground truth a tracker box belongs to)."""
+    truth = load_ground_truth(small_dataset)
+    from simrig.dataset.evaluation import evaluation_of, ignore_rules
+    from simrig.dataset.tracks_file import TRACKS2D_FILE, TRACKS2D_SCHEMA
+
+    rules = ignore_rules(truth, evaluation_of(small_dataset.scenario, settings))
+    rng = np.random.default_rng(5)
+    rows, cams = np.nonzero(truth.in_view)
+    boxes = truth.boxes2d[rows, cams].copy()
+    on_ignored = rules[rows, cams] != 0
+    jitter = rng.normal(0, 1.5, size=boxes.shape) * ~on_ignored[:, None]
+    boxes += jitter
+    width = boxes[:, 2] - boxes[:, 0]
+    shifted = on_ignored & (np.arange(len(rows)) % 2 == 1)
+    boxes[shifted, 0] += 0.25 * width[shifted]
+    boxes[shifted, 2] += 0.25 * width[shifted]
+    boxes[:, 2:] = np.maximum(boxes[:, 2:], boxes[:, :2] + 1.0)
+    ids = truth.actor_id[rows] + 1000 * (truth.frame[rows] > 15) * (truth.actor_id[rows] % 2)
+    assert on_ignored.any() and (~on_ignored).any()
+    names = np.array(truth.rig.camera_names, dtype=object)
+    order = np.lexsort((cams, truth.frame[rows]))
+    folder = tmp_path / "hand"
+    folder.mkdir()
+    b = boxes[order]
+    pq.write_table(pa.table({
+        "frame": truth.frame[rows][order].astype(np.int32), "camera": names[cams][order].tolist(),
+        "track_id": ids[order].astype(np.int64), "class": truth.label[rows][order].tolist(),
+        "score": np.ones(len(rows)), "x1": b[:, 0], "y1": b[:, 1], "x2": b[:, 2], "y2": b[:, 3]},
+        schema=TRACKS2D_SCHEMA), folder / TRACKS2D_FILE)
+    out = export(small_dataset, "motchallenge", tmp_path / "mot", tracks=folder, evaluation=settings)
+    report = score(small_dataset, folder, evaluation=settings)
+    assert_equal_to_trackeval(report, trackeval_on(out, "hand"))
+
+
+def test_kitti_labels_hold_every_box_in_view_with_the_projected_depth_and_dont_care(small_dataset, tmp_path):
     out = export(small_dataset, "kitti", tmp_path / "kitti")
     truth = load_ground_truth(small_dataset)
     projections = small_dataset.table("projections").to_pylist()
     depth = {(p["frame"], p["actor_id"], p["camera"]): p["depth"] for p in projections}
+    from simrig.dataset.evaluation import evaluation_of, ignore_rules
+
+    rules = ignore_rules(truth, evaluation_of(small_dataset.scenario))
+    truncation = {(p["frame"], p["actor_id"], p["camera"]): p["truncation"] for p in projections}
     for c, camera in enumerate(truth.rig.camera_names):
         lines = (out / camera / "label_02" / "0000.txt").read_text().splitlines()
         assert len(lines) == int(truth.in_view[:, c].sum())
-        for line in lines[:20]:
+        dont_care = [line.split() for line in lines if line.split()[2] == "DontCare"]
+        assert len(dont_care) == int(np.count_nonzero(rules[:, c]))  # ignored ground truth: KITTI's DontCare
+        assert all(f[1] == "-1" for f in dont_care)
+        for line in [line for line in lines if "DontCare" not in line][:20]:
             f = line.split()
             frame, actor = int(f[0]), int(f[1])
             row = np.nonzero((truth.frame == frame) & (truth.actor_id == actor))[0][0]
+            fraction = truncation[(frame, actor, camera)]
+            assert int(f[3]) == (0 if fraction <= 1e-9 else 1 if fraction <= 0.5 else 2)
             assert [float(v) for v in f[6:10]] == pytest.approx(truth.boxes2d[row, c], abs=1e-3)
             assert float(f[15]) == pytest.approx(depth[(frame, actor, camera)], abs=1e-3)  # level cameras: z of centre
             assert [float(v) for v in f[10:13]] == pytest.approx(truth.boxes[row, [5, 4, 3]], abs=1e-3)  # h, w, l

@@ -100,3 +100,44 @@ def test_every_detection_goes_to_at_most_one_track_and_only_within_the_gate(n, m
     for j, i in enumerate(owner.tolist()):
         if i >= 0:
             assert cost[i, j] <= gate
+
+
+# -- the physical constraint: one detection per camera per track -----------------------------------------------
+def _two_views_of_three_cars(seed):
+    """3 tracks, 2 cameras: cars 1 and 2 seen by both cameras, car 0 by camera 0 only, which also reports a
+    second, slightly worse detection next to it (a ghost, or a neighbour the track has not met): 6 detections."""
+    rng = np.random.default_rng(seed)
+    cost = rng.uniform(3.0, 9.0, (3, 6))
+    cameras = np.array([0, 0, 0, 1, 1, 0])
+    cost[0, 0] = rng.uniform(0.1, 0.5)
+    for car in (1, 2):
+        cost[car, car] = cost[car, 2 + car] = rng.uniform(0.1, 0.5)
+    cost[0, 5] = 0.8
+    return cost, cameras
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_with_the_constraint_no_track_takes_two_detections_of_one_camera(seed):
+    cost, cameras = _two_views_of_three_cars(seed)
+    free = fota(cost, gate=5.0).owner
+    assert free.tolist() == [0, 1, 2, 1, 2, 0]  # unconstrained, track 0 fuses both of camera 0's detections
+    owner = fota(cost, gate=5.0, cameras=cameras).owner
+    assert owner.tolist() == [0, 1, 2, 1, 2, -1]  # the worse one is left over (it may start a track)
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(n=st.integers(1, 6), m=st.integers(1, 10), cameras=st.integers(1, 3), seed=st.integers(0, 2**31))
+def test_the_constraint_holds_on_any_problem_and_only_removes_matches_that_break_it(n, m, cameras, seed):
+    rng = np.random.default_rng(seed)
+    cost = rng.uniform(0.0, 6.0, (n, m))
+    camera = rng.integers(0, cameras, m)
+    free = fota(cost, gate=4.0).owner
+    owner = fota(cost, gate=4.0, cameras=camera).owner
+    for track in range(n):
+        seen = camera[owner == track]
+        assert len(seen) == len(set(seen.tolist()))
+    for j in np.nonzero(owner >= 0)[0]:
+        assert cost[owner[j], j] <= 4.0
+    pairs = {(int(i), int(camera[j])) for j, i in enumerate(free.tolist()) if i >= 0}
+    if len(pairs) == int(np.sum(free >= 0)):  # no conflict: the constraint changes nothing
+        assert owner.tolist() == free.tolist()

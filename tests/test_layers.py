@@ -88,18 +88,13 @@ def test_every_module_has_a_layer() -> None:
     assert [name for name in modules() if layer_of(name) is None] == []
 
 
-# Being removed by the change that gives export its own ground-truth reader and track projection (issue 17).
-_KNOWN_UNTIL_MERGE = {("simrig.export.api", "simrig.scoring.ground_truth"),
-                      ("simrig.export.api", "simrig.scoring.inputs")}
-
-
 def test_no_module_imports_from_a_layer_above_its_own() -> None:
     found = modules()
     upward = []
     for module, path in sorted(found.items()):
         mine = layer_of(module)
         for target in sorted(imported(module, path)):
-            if layer_of(target) not in ALLOWED[mine] and (module, target) not in _KNOWN_UNTIL_MERGE:
+            if layer_of(target) not in ALLOWED[mine]:
                 upward.append(f"{module} ({mine}) imports {target} ({layer_of(target)})")
     assert upward == []
 

@@ -135,3 +135,11 @@ def test_renders_are_deterministic_and_nodes_are_reused(meter):
     assert len(meter.scene.scene.mesh_nodes) == nodes
     assert (first.visible_px[:, 2] > 0).sum() >= 1  # the bus behind is seen by a back camera
 
+
+
+def test_scene_bounds_work_under_numpy_2(meter):
+    # pyrender computes scene bounds (used by shadows and viewers) with np.infty, which numpy 2 removed.
+    scene = RigScene()
+    scene.set_frame(EGO, np.array(["car"], dtype=object), np.array([_box("car", 10.0, 0.0)]))
+    scene.colour(build_rig(RigConfig()).cameras[0], build_rig(RigConfig()), EGO)  # places the nodes
+    assert scene.scene.bounds[1, 0] == pytest.approx(10.0 + CLASS_SPECS[ActorClass.CAR].length / 2)

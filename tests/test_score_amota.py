@@ -162,8 +162,8 @@ def test_renaming_track_ids_changes_nothing():
 def test_generated_dataset_3d_matching_equals_motmetrics(small_dataset):
     """The class sequences of a generated dataset (class ranges applied), scored against its ground truth moved
     by 0.8 m noise with misses and an id change, equal py-motmetrics' accumulator on the same rows."""
+    from simrig.dataset.ground_truth import load_ground_truth
     from simrig.dataset.tracks_file import TrackRows
-    from simrig.scoring.ground_truth import load_ground_truth
     from simrig.scoring.inputs import class_sequences
 
     mm = motmetrics_module()
@@ -193,3 +193,21 @@ def test_generated_dataset_3d_matching_equals_motmetrics(small_dataset):
         theirs = mm.metrics.create().compute(acc, metrics=names, name="x").iloc[0]
         c = clear_counts(seq, accumulate(seq, None))
         assert [c.tp, c.ids, c.fn, c.fp, c.frag] == [theirs[name] for name in names], seq.label
+
+
+def test_a_class_that_reaches_no_recall_level_counts_motar_zero_overall():
+    """One car tracked perfectly, one truck never matched: the devkit gives the truck its metric_worst MOTAR 0
+    and averages the classes with ground truth, overall MOTAR (1 + 0) / 2 = 0.5 (and AMOTA 0.5)."""
+    from simrig.scoring.amota import combine_classes
+    from simrig.scoring.results import METRICS_3D
+
+    car = [(f, 1, 0.0, 0.0, 0.0, 0.0) for f in range(5)]
+    truck = [(f, 2, 20.0, 0.0, 0.0, 0.0) for f in range(5)]
+    per_class = {
+        "car": amota_family(sequence(car, [(f, 7, 0.0, 0.0, 0.0, 0.0, 0.9) for f in range(5)])).metrics,
+        "truck": amota_family(sequence(truck, [(f, 8, 40.0, 0.0, 0.0, 0.0, 0.9) for f in range(5)])).metrics,
+    }
+    assert per_class["car"]["MOTAR"] == 1.0 and per_class["truck"]["MOTAR"] == 0.0
+    overall = combine_classes(per_class, METRICS_3D)
+    assert (overall["MOTAR"], overall["AMOTA"], overall["MOTA"]) == (0.5, 0.5, 0.5)
+    assert (overall["TP"], overall["FN"], overall["ML"]) == (5, 5, 1)

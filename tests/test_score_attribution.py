@@ -6,9 +6,9 @@ from simrig.scenarios import load_scenario
 
 from simrig.causes import Cause
 from simrig.dataset import Dataset
+from simrig.dataset.ground_truth import load_ground_truth
 from simrig.pipeline.generate import generate
 from simrig.scoring import score, write_tracks
-from simrig.scoring.ground_truth import load_ground_truth
 from simrig.types import ActorClass, Box3D, Track
 
 OCCLUDED_FRAMES = range(10, 30)

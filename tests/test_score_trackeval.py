@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from peer_scorers import flatten, motmetrics_module, random_scene, trackeval_data, trackeval_metrics
 
+from simrig.dataset.ground_truth import load_ground_truth
 from simrig.dataset.tracks_file import TrackRows
 from simrig.scoring.clear import CLEAR
 from simrig.scoring.counts import sum_counts
-from simrig.scoring.ground_truth import load_ground_truth
 from simrig.scoring.hota import HOTA
 from simrig.scoring.identity import Identity
 from simrig.scoring.inputs import camera_sequences

@@ -8,10 +8,10 @@ import pyarrow.parquet as pq
 import pytest
 
 from simrig.cli import main
+from simrig.dataset.ground_truth import load_ground_truth
 from simrig.dataset.tracks_file import TRACKS2D_SCHEMA, TRACKS3D_SCHEMA
 from simrig.errors import TracksError
 from simrig.scoring import read_tracks, score, write_tracks
-from simrig.scoring.ground_truth import load_ground_truth
 from simrig.types import ActorClass, Box2D, Box3D, Track
 
 CAMERAS = ("CAM_A", "CAM_B")
@@ -95,15 +95,21 @@ def ground_truth_tracks(truth, jitter_rng=None):
 
 def test_perfect_tracker_scores_one_and_nothing_is_dropped(small_dataset, tmp_path):
     """Exact boxes under renamed ids: AMOTA 1, MOTA 1, IDS 0, HOTA 1 and no error. Every projected 2D box is
-    either a TP or an FP (none silently dropped)."""
+    a TP, an FP or removed because it sits on an ignored box (none silently dropped); with the evaluation
+    region off, every one is a TP."""
     truth = load_ground_truth(small_dataset)
     write_tracks(tmp_path / "perfect", ground_truth_tracks(truth))
     report = score(small_dataset, tmp_path / "perfect")
     overall3d, overall2d = report.metrics3d["overall"], report.metrics2d["overall"]
     assert (overall3d["AMOTA"], overall3d["MOTA"], overall3d["IDS"], overall3d["AMOTP"]) == (1.0, 1.0, 0, 0.0)
     assert (overall2d["HOTA"], overall2d["MOTA"], overall2d["IDF1"], overall2d["IDSW"]) == (1.0, 1.0, 1.0, 0)
+    assert set(report.errors.column("kind").to_pylist()) <= {"IGN"}  # no error; nothing left untracked either
     assert report.errors.num_rows == 0
-    assert overall2d["CLR_TP"] + overall2d["CLR_FP"] == int(truth.in_view.sum())
+    ignored = report.metrics2d["ground_truth"]["overall"]
+    assert 0 < ignored["ignored"] < ignored["boxes"] == int(truth.in_view.sum())
+    assert overall2d["CLR_TP"] + overall2d["CLR_FP"] + ignored["ignored"] == int(truth.in_view.sum())
+    everything = score(small_dataset, tmp_path / "perfect", evaluation={"ignore": False}).metrics2d["overall"]
+    assert everything["CLR_TP"] == int(truth.in_view.sum()) and everything["CLR_FP"] == 0
 
 
 def test_cli_score_prints_a_table_and_writes_json(small_dataset, tmp_path, capsys):

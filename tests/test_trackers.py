@@ -1,15 +1,18 @@
 """The reference trackers on hand-built frames: one car seen by two cameras, silent cameras, empty frames,
 floods of detections and bad numbers."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from simrig.trackers.errors import TrackerInputError
 from simrig.trackers.life import QueryLife, TrackLife
 
 from simrig import trackers as tracker
+from simrig.geometry import project_boxes
 from simrig.types import ActorClass, Box2D, Box3D, Camera, Detection, EgoPose, Rig, SensorFrame
 
-NAMES = ("saga", "global_hungarian", "percam_merge", "simpletrack")
+NAMES = ("saga", "global_hungarian", "percam_merge", "simpletrack", "mutr3d", "polymot")
 RIG = Rig("pair", tuple(
     Camera(name, 1600, 900, 1000.0, 1000.0, 800.0, 450.0, (0.0, 0.0, 1.5), yaw)
     for name, yaw in (("A", 0.3), ("B", -0.3))
@@ -22,8 +25,23 @@ def _detection(x, y, *, score=0.9, yaw=0.0, vx=10.0, label=ActorClass.CAR):
 
 
 def _frame(index, per_camera):
-    return SensorFrame(index, index * DT, EgoPose(0, 0, 0, 0), RIG,
-                       {name: tuple(per_camera.get(name, ())) for name in RIG.camera_names})
+    """A frame of RIG with the ego at the origin; each detection's pixel box is its 3D box projected into its
+    camera (kept as given where the box is out of that camera's view)."""
+    ego = EgoPose(0, 0, 0, 0)
+    views = {}
+    for camera, name in enumerate(RIG.camera_names):
+        detections = tuple(per_camera.get(name, ()))
+        with_3d = [d for d in detections if d.box3d is not None]
+        if with_3d:
+            boxes = np.array([[d.box3d.x, d.box3d.y, d.box3d.z, d.box3d.length, d.box3d.width, d.box3d.height,
+                               d.box3d.yaw] for d in with_3d])
+            pixels = iter(project_boxes(boxes, RIG, ego).boxes[camera])
+            detections = tuple(
+                d if d.box3d is None else (lambda p, d=d: replace(d, box=Box2D(*map(float, p)))
+                                           if np.isfinite(p).all() else d)(next(pixels))
+                for d in detections)
+        views[name] = detections
+    return SensorFrame(index, index * DT, ego, RIG, views)
 
 
 def _car_seen_twice(frames=30, silent=()):
@@ -46,7 +64,7 @@ def _run(name, frames, **params):
     return [t.step(frame) for frame in frames]
 
 
-@pytest.mark.parametrize("name", ["saga", "percam_merge", "simpletrack"])
+@pytest.mark.parametrize("name", ["saga", "percam_merge", "simpletrack", "mutr3d", "polymot"])
 def test_a_car_seen_by_two_cameras_is_one_track_with_one_id(name):
     outputs = _run(name, _car_seen_twice())
     assert all(len(tracks) == 1 for tracks in outputs)
@@ -135,24 +153,42 @@ def test_unknown_parameters_and_values_are_named():
         tracker.create("global_hungarian", life="forever")
 
 
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", [name for name in NAMES if name != "polymot"])  # polymot: one cost, one life
 def test_every_cost_and_the_mutr3d_life_rule_run(name):
-    params = {"life": "mutr3d"} if name == "simpletrack" else {"cost": "giou_bev", "life": "mutr3d"}
+    params = ({"life": "mutr3d"} if name == "simpletrack" else {"cost2d": "centre", "life": "mutr3d_code"}
+              if name == "mutr3d" else {"cost": "giou_bev", "life": "mutr3d"})
     outputs = _run(name, _car_seen_twice(frames=10), **params)
     assert all(len(tracks) >= 1 for tracks in outputs)
 
 
-def test_the_mutr3d_rule_counts_misses_below_tau_old_and_resets_only_at_tau_new():
-    rule, life = QueryLife(), TrackLife(score=0.9)
+def test_the_public_codes_mutr3d_rule_counts_misses_below_tau_old_and_resets_only_at_tau_new():
+    rule, life = QueryLife(reset="tau_new"), TrackLife(score=0.9)
     assert not rule.may_start(0.39) and rule.may_start(0.4)
     for score in (0.2, 0.3, 0.37, None):  # 0.37 is between τ_old and τ_new: neither a miss nor a reset
         rule.observe(life, score, DT)
     assert life.misses == 3 and not rule.is_dead(life) and not rule.is_reported(life)
-    rule.observe(life, 0.45, DT)
-    assert life.misses == 0 and rule.is_reported(life)
-    for _ in range(5):
-        rule.observe(life, None, DT)
-    assert rule.is_dead(life)
+
+
+def _mutr3d_scores(life_name, scores):
+    """Feed ``scores`` (one per frame) to the life rule ``life_name`` builds; the frame index (1-based) at
+    which the track is dead, or None."""
+    from simrig.trackers.settings import build_life
+    rule, life = build_life(life_name, min_hits=1, max_age_s=1.0), TrackLife(score=0.9)
+    for frame, score in enumerate(scores, start=1):
+        rule.observe(life, score, DT)
+        if rule.is_dead(life):
+            return frame
+    return None
+
+
+@pytest.mark.parametrize("recovery", [0.37, 0.9])  # between τ_old and τ_new; above τ_new
+def test_mutr3d_life_as_the_paper_says_t_successive_frames_below_tau_old(recovery):
+    low = [0.2, None, 0.3, 0.1]  # 4 frames below τ_old = 0.35 (None: nothing assigned, score 0)
+    assert _mutr3d_scores("mutr3d", low + [recovery] + low + [recovery] * 3) is None  # 4, recover, 4: survives
+    assert _mutr3d_scores("mutr3d", [0.9] + low + [0.34] + [0.9]) == 6  # 5 consecutive: dies at the 5th
+    # The public code's variant needs no succession: a recovery below τ_new does not reset its count.
+    died = _mutr3d_scores("mutr3d_code", low + [recovery] + low + [recovery] * 3)
+    assert died == (6 if recovery < 0.4 else None)
 
 
 def test_same_frames_same_tracks():
@@ -168,3 +204,156 @@ def test_saga_drops_a_duplicate_track_but_never_a_neighbour_in_the_next_lane():
     assert [len(ts) for ts in _run("saga", twin_births, birth_merge_m=0)] == [1, 1, 1]
     side_by_side = [_frame(k, {"A": [_detection(20 + k, 1.75)], "B": [_detection(20 + k, -1.75)]}) for k in range(5)]
     assert all(len(ts) == 2 for ts in _run("saga", side_by_side))
+
+
+def _side_by_side_in_one_camera(frames=25, lateral=2.0):
+    """Car 1 alone in camera A for 10 frames; then car 2 appears right beside it (``lateral`` m, 0.1 m of road
+    between two 1.9 m wide cars), both at 10 m/s."""
+    out = []
+    for k in range(frames):
+        x = 20.0 + 1.0 * k
+        views = [_detection(x, 0.0)] + ([_detection(x, lateral)] if k >= 10 else [])
+        out.append(_frame(k, {"A": views}))
+    return out
+
+
+def _recording_updates(t):
+    """Wrap ``t.update`` to record, per frame, the camera of every detection each track was updated with."""
+    fused = []
+    original = t.update
+
+    def update(detections, owner):
+        per_track = {}
+        for j, i in enumerate(owner.tolist()):
+            if i >= 0:
+                per_track.setdefault(i, []).append(int(detections.cameras[j]))
+        fused.append(per_track)
+        return original(detections, owner)
+
+    t.update = update
+    return fused
+
+
+@pytest.mark.parametrize("one_per_camera", [True, False])
+def test_fota_fuses_two_detections_of_one_camera_only_without_the_physical_constraint(one_per_camera):
+    fused = []
+    for frames in (_side_by_side_in_one_camera(), _car_seen_twice(frames=30)):
+        t = tracker.create("saga", one_per_camera=one_per_camera)
+        record = _recording_updates(t)
+        t.reset(rig=RIG)
+        for frame in frames:
+            t.step(frame)
+        fused += record
+    doubled = sum(len(cams) != len(set(cams)) for per_track in fused for cams in per_track.values())
+    assert (doubled == 0) if one_per_camera else (doubled > 0)
+    both = sum(sorted(cams) == [0, 1] for per_track in fused for cams in per_track.values())
+    assert both >= 28  # one detection of each camera per track is still fused (the car seen twice)
+
+
+def test_two_cars_side_by_side_in_one_camera_each_keep_their_own_track():
+    outputs = _run("saga", _side_by_side_in_one_camera())
+    assert [len(ts) for ts in outputs] == [1] * 10 + [2] * 15
+    lanes = {t.track_id: [] for ts in outputs for t in ts}
+    for ts in outputs[10:]:
+        for t in ts:
+            lanes[t.track_id].append(t.box3d.y)
+    assert len(lanes) == 2  # car 1's track never changed id; car 2 got one track of its own
+    near = sorted(lanes.values(), key=lambda ys: np.mean(ys))
+    assert np.allclose(near[0], 0.0, atol=0.2) and np.allclose(near[1][2:], 2.0, atol=0.3)
+    free = _run("saga", _side_by_side_in_one_camera(), one_per_camera=False)
+    assert [len(ts) for ts in free][10:] == [1] * 15  # unconstrained: car 1's track swallows car 2
+
+
+def test_mutr3d_associates_in_the_image_and_updates_in_3d_from_every_camera_that_matched():
+    # Monocular depth error: each camera's 3D box is off by up to 3 m along its own viewing ray, opposite
+    # ways; the projected boxes still overlap the track's projection, so one track takes both and the fused
+    # 3D position lies between the two.
+    frames = []
+    for k in range(20):
+        x = 25.0 + 1.0 * k
+        error = 0.0 if k == 0 else 3.0 if k % 2 else -3.0  # both cameras agree at birth
+        frames.append(_frame(k, {"A": [_detection(x + error, 0.0)], "B": [_detection(x - error, 0.0)]}))
+    outputs = _run("mutr3d", frames)
+    assert all(len(ts) == 1 for ts in outputs) and len({ts[0].track_id for ts in outputs}) == 1
+    assert abs(outputs[-1][0].box3d.x - (25.0 + 19)) < 1.5
+    t = tracker.create("mutr3d")
+    t.reset(rig=RIG)
+    t.step(frames[0])
+    near_in_3d = replace(_detection(26.0, 0.0), box=Box2D(0, 0, 40, 30))  # 1 m off in 3D, elsewhere in pixels
+    far = SensorFrame(1, DT, EgoPose(0, 0, 0, 0), RIG, {"A": (near_in_3d,), "B": ()})
+    assert [track.track_id for track in t.step(far)] == [2]  # not matched in the image: a new query
+
+
+# -- polymot: the modern filter baseline -------------------------------------------------------------------------
+@pytest.mark.parametrize("model_name", ["CTRA", "BICYCLE"])
+def test_turning_models_jacobian_matches_finite_differences(model_name):
+    from filterpy.kalman import KalmanFilter
+    from simrig.trackers import turning_motion
+    from simrig.trackers.motion import KalmanConfig
+    model = getattr(turning_motion, model_name)
+    x0 = np.array([3.0, -2.0, 0.8, 4.6, 1.9, 1.6, 0.7, 12.0, 1.5, 0.3 if model_name == "CTRA" else 0.02])
+
+    def moved(x, dt=0.1):
+        kf = KalmanFilter(dim_x=10, dim_z=7)
+        kf.x, kf.P = x[:, None].copy(), np.zeros((10, 10))
+        model.predict(kf, dt, KalmanConfig())
+        return kf.x[:, 0]
+
+    numeric = np.column_stack([(moved(x0 + e) - moved(x0 - e)) / 2e-6 for e in np.eye(10) * 1e-6])
+    kf = KalmanFilter(dim_x=10, dim_z=7)
+    kf.x, kf.P = x0[:, None].copy(), np.eye(10)
+    model.predict(kf, 0.1, KalmanConfig())
+    analytic_P = kf.P - np.diag(model.process) * 0.1  # F I Fᵀ
+    assert np.allclose(analytic_P, numeric @ numeric.T, atol=1e-6)
+
+
+@pytest.mark.parametrize("model_name", ["CTRA", "BICYCLE"])
+def test_turning_models_follow_a_circle(model_name):
+    # 10 m/s on a 50 m circle: ω = 0.2 rad/s, κ = 0.02 /m; one second in ten steps ends on the circle.
+    from filterpy.kalman import KalmanFilter
+    from simrig.trackers import turning_motion
+    from simrig.trackers.motion import KalmanConfig
+    model = getattr(turning_motion, model_name)
+    kf = KalmanFilter(dim_x=10, dim_z=7)
+    kf.x = np.array([0.0, -50.0, 0.0, 4.6, 1.9, 1.6, 0.0, 10.0, 0.0, 0.2 if model_name == "CTRA" else 0.02])[:, None]
+    for _ in range(10):
+        model.predict(kf, 0.1, KalmanConfig())
+    x, y, heading = kf.x[0, 0], kf.x[1, 0], kf.x[6, 0]
+    assert (x, y) == pytest.approx((50 * np.sin(0.2), -50 * np.cos(0.2)), abs=0.01)
+    assert heading == pytest.approx(0.2)
+
+
+def test_polymot_reports_a_missed_frame_on_its_prediction_with_a_decayed_score():
+    frames = [_frame(k, {} if k == 6 else {"A": [_detection(20.0 + k, 0.0)]}) for k in range(10)]
+    outputs = _run("polymot", frames)
+    assert [len(ts) for ts in outputs] == [1] * 10 and len({ts[0].track_id for ts in outputs}) == 1
+    assert outputs[6][0].score == pytest.approx(0.9 * 0.5)
+    assert outputs[6][0].box3d.x == pytest.approx(26.0, abs=0.3)  # predicted, 1 m per frame
+    assert outputs[7][0].score == pytest.approx(0.9)
+
+
+def test_polymot_second_stage_updates_a_track_with_a_low_score_detection_but_never_starts_one():
+    frames = [_frame(k, {"A": [_detection(20.0 + k, 0.0, score=0.9 if k < 5 else 0.3)]}) for k in range(10)]
+    outputs = _run("polymot", frames)
+    assert all(len(ts) == 1 for ts in outputs) and len({ts[0].track_id for ts in outputs}) == 1
+    assert outputs[9][0].box3d.x == pytest.approx(29.0, abs=0.3) and outputs[9][0].score == pytest.approx(0.3)
+    assert _run("polymot", [_frame(k, {"A": [_detection(20.0 + k, 0.0, score=0.3)]}) for k in range(3)]) == [
+        [], [], []]
+
+
+def test_mutr3d_tracker_keeps_a_query_through_4_low_frames_twice_and_drops_it_at_the_5th_in_a_row():
+    def scores_run(scores):
+        frames = [_frame(k, {"A": [_detection(20.0 + k, 0.0, score=s)]}) for k, s in enumerate(scores)]
+        t = tracker.create("mutr3d")
+        t.reset(rig=RIG)
+        alive = []
+        for frame in frames:
+            t.step(frame)
+            alive.append([track.track_id for track in t.tracks])
+        return alive
+
+    low = [0.2] * 4  # matched every frame, but below τ_old = 0.35
+    survived = scores_run([0.9] + low + [0.9] + low + [0.9] * 2)
+    assert all(ids == [1] for ids in survived)
+    died = scores_run([0.9] + low + [0.2] + [0.9])
+    assert died[4] == [1] and died[5] == [] and died[6] == [2]  # gone at the 5th low frame; a new query after

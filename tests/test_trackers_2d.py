@@ -122,3 +122,30 @@ def test_bad_embedding_is_named():
     t.reset(rig=STEREO)
     with pytest.raises(TrackerInputError, match="frame 0, camera 'left', detection 0: embedding"):
         t.step(frame(0, {"left": [bad]}))
+
+
+# -- ByteTrack ---------------------------------------------------------------------------------------------------
+def test_bytetrack_keeps_a_track_through_low_score_boxes_that_sort_drops():
+    # A car whose score falls to 0.3 (partly occluded) for frames 5-9: ByteTrack's second stage keeps the id;
+    # SORT (score threshold 0.5) loses it and starts anew.
+    frames = [frame(k, {"left": [detection(100 + 8 * k, score=0.3 if 5 <= k < 10 else 0.9)]}) for k in range(15)]
+    byte = ids_in(run("bytetrack", frames))
+    assert all(row == [1] for row in byte)
+    sort = ids_in(run("sort", frames, min_hits=1))
+    assert sort[5] == [] and sort[12] != sort[2]
+
+
+def test_bytetrack_never_starts_a_track_from_a_low_or_borderline_box_and_confirms_on_the_second_frame():
+    low = [frame(k, {"left": [detection(100 + 8 * k, score=0.55)]}) for k in range(5)]  # < track_thresh + 0.1
+    assert ids_in(run("bytetrack", low)) == [[]] * 5
+    late = [frame(k, {"left": [detection(100 + 8 * k)] if k >= 2 else []}) for k in range(6)]
+    assert ids_in(run("bytetrack", late)) == [[], [], [], [1], [1], [1]]  # born at 2, confirmed at 3
+    first = [frame(k, {"left": [detection(100 + 8 * k)]}) for k in range(3)]
+    assert ids_in(run("bytetrack", first)) == [[1], [1], [1]]  # activated at once on the first frame
+
+
+def test_bytetrack_finds_a_lost_track_again_within_its_buffer():
+    frames = [frame(k, {"left": [] if 4 <= k < 8 else [detection(100 + 8 * k)]}) for k in range(12)]
+    ids = ids_in(run("bytetrack", frames))
+    assert ids[3] == [1] and ids[5] == [] and ids[8] == [1]
+    assert ids_in(run("bytetrack", frames, track_buffer=2))[9] == [2]  # lost for too long: a new track

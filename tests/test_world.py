@@ -61,10 +61,12 @@ def test_boxes_have_the_class_size_that_highway_env_simulates():
 
 
 def test_density_is_held_and_ids_are_never_reused():
-    world = _world()
+    # 24 vehicles in 120 m: a density IDM holds at these speeds (30 needs gaps IDM cannot keep without hard
+    # braking; new vehicles are only placed where it can, see simrig.world.traffic).
+    world = _world(vehicles=24)
     states = _run(world, 150)
     counts = [len(s.actor_ids) for s in states]
-    assert min(counts[1:]) >= 27 and max(counts) <= 30
+    assert min(counts[1:]) >= 21 and max(counts) <= 24
     seen_last = {}
     for state in states:
         assert len(set(state.actor_ids.tolist())) == len(state.actor_ids)
@@ -117,4 +119,71 @@ def test_other_maps_run_with_traffic(env):
     states = _run(world, 40)
     assert max(len(s.actor_ids) for s in states) >= 5
     assert all(np.isfinite(s.boxes).all() for s in states)
+    world.close()
+
+
+def _crash_two_vehicles(world):
+    """Put one non-ego vehicle onto another (same lane, overlapping): highway-env flags both crashed."""
+    a, b = [v for v in world.env.unwrapped.road.vehicles if v is not world.ego][:2]
+    b.position = a.position + 1.0 * a.direction
+    b.heading, b.speed = a.heading, a.speed + 5.0
+    return a.simrig_id, b.simrig_id
+
+
+def test_a_crash_of_other_vehicles_is_an_event_and_they_leave_the_road():
+    world = _world(vehicles=10)
+    world.reset()
+    crashed = _crash_two_vehicles(world)
+    state = world.step()
+    assert sorted(e for e in state.events if e.startswith("vehicle_crashed")) == [
+        f"vehicle_crashed id={i}" for i in sorted(crashed)
+    ]
+    later = [world.step() for _ in range(30)]
+    for s in [state, *later]:
+        assert not set(crashed) & set(s.actor_ids.tolist())  # removed in the frame of the crash, never back
+    assert not any(v.crashed for v in world.env.unwrapped.road.vehicles)
+    assert np.hypot(later[-1].boxes[:, 7], later[-1].boxes[:, 8]).mean() > 15.0  # nothing left blocking a lane
+    assert len(later[-1].actor_ids) == 10  # the window refilled
+    world.close()
+
+
+def test_a_crash_reaches_the_dataset_manifest_as_a_world_event(tmp_path, monkeypatch):
+    from simrig.scenarios import load_scenario
+    from simrig.scenarios.sensor_schema import RenderConfig
+
+    from simrig.pipeline.generate import generate
+    from simrig.world.traffic import TrafficWorld as World
+
+    crashed = []
+    reset = World.reset
+
+    def reset_then_crash(self):
+        state = reset(self)
+        crashed.extend(_crash_two_vehicles(self))
+        return state
+
+    monkeypatch.setattr(World, "reset", reset_then_crash)
+    scenario = load_scenario("highway_surround6")
+    scenario = scenario.model_copy(update={"render": RenderConfig(visibility=False)})
+    result = generate(scenario, seed=0, out=tmp_path / "ds", frames=4)
+    events = [e for e in result.manifest["events"] if e["event"].startswith("vehicle_crashed")]
+    assert events == [{"frame": 1, "event": f"vehicle_crashed id={i}"} for i in sorted(crashed)]
+
+
+def test_dense_traffic_does_not_crash_and_keeps_moving():
+    # highway_surround6's traffic (40 vehicles in 150 m), seed 1: before new vehicles were placed at speeds
+    # their gap allows, the first crash came at frame 37 and 21 vehicles had crashed by frame 200.
+    from simrig.scenarios import load_scenario
+
+    traffic = load_scenario("highway_surround6").traffic
+    streams = RandomStreams(1)
+    world = TrafficWorld(traffic, 10.0, env_seed=streams.integer_seed("traffic"), rng=streams.generator("population"))
+    states, flagged = [world.reset()], set()
+    for _ in range(199):
+        states.append(world.step())
+        flagged |= {v.simrig_id for v in world.env.unwrapped.road.vehicles if v.crashed}
+    assert not flagged
+    assert not [e for s in states for e in s.events if "crashed" in e]
+    speeds = [np.hypot(s.boxes[:, 7], s.boxes[:, 8]).mean() for s in states]
+    assert min(speeds) > 10.0  # IDM's equilibrium speed for this density is ~13 m/s; nothing stands still
     world.close()

@@ -6,13 +6,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from simrig.scenarios import load_scenario
+from simrig.scenarios.overrides import with_setting
 
 from simrig.dataset import Dataset
 from simrig.errors import DatasetError
 from simrig.pipeline.cache import cached_dataset, world_key
 from simrig.pipeline.generate import generate
-from simrig.scenarios import load_scenario
-from simrig.scenarios.overrides import with_setting
 
 
 def _files(folder: Path) -> dict[str, bytes]:

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .costs import bev_distance, enlarged, mahalanobis, overlaps
+from .costs import bev_corners, bev_distance, enlarged, mahalanobis, overlaps
 
 
 @dataclass(frozen=True)
@@ -60,12 +60,41 @@ class DistanceCost:
         return bev_distance(predicted, detections)
 
 
+@dataclass(frozen=True)
+class MultiCueCost:
+    """Geometry, distance and heading in one cost, for the modern filter baseline (after Poly-MOT's multi-cue
+    association and MCTrack's Ro_GDIoU: a rotated GIoU with DIoU's distance term):
+
+        C = (1 − GIoU_bev) + d² / ρ² + heading_weight · (1 − |cos Δθ|)
+
+    with d the footprint centres' distance and ρ the diagonal of the axis-aligned rectangle enclosing both
+    footprints (DIoU's normalisation, so the distance term is in [0, 1)); |cos Δθ| makes a box facing backwards
+    as good as one facing forwards. Pairs whose centres are more than ``max_distance`` [m] apart are never
+    compared (+inf), as Poly-MOT's pre-filter. Gate 1.5 on C."""
+
+    gate: float = 1.5
+    max_distance: float = 6.0
+    heading_weight: float = 0.5
+
+    def __call__(self, predicted: np.ndarray, innovation: np.ndarray, detections: np.ndarray) -> np.ndarray:
+        _, giou = overlaps(predicted, detections, bev=True, floor=1.0 - self.gate)
+        corners_t, corners_d = bev_corners(predicted), bev_corners(detections)
+        low = np.minimum(corners_t.min(axis=1)[:, None, :], corners_d.min(axis=1)[None, :, :])
+        high = np.maximum(corners_t.max(axis=1)[:, None, :], corners_d.max(axis=1)[None, :, :])
+        rho2 = np.sum((high - low) ** 2, axis=-1)
+        d = bev_distance(predicted, detections)
+        heading = 1.0 - np.abs(np.cos(predicted[:, None, 6] - detections[None, :, 6]))
+        cost = (1.0 - giou) + d * d / np.maximum(rho2, 1e-12) + self.heading_weight * heading
+        return np.where(d <= self.max_distance, cost, np.inf)
+
+
 COST_MODELS = {
     "mahalanobis": MahalanobisCost,
     "giou3d": GiouCost,
     "giou_bev": lambda **kw: GiouCost(bev=True, **kw),
     "iou3d": IouCost,
     "distance": DistanceCost,
+    "multicue": MultiCueCost,
 }
 """Cost models by the name a tracker's ``cost`` parameter takes; keyword arguments go to the model."""
 

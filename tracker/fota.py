@@ -1,4 +1,4 @@
-"""FOTA, the Fractional Optimal-Transport Assignment of SAGA-Track (seed 000, §3.2, Eq. 6–15).
+"""FOTA, the Fractional Optimal-Transport Assignment of SAGA-Track (Nguyen et al., arXiv 2022, §3.2, Eq. 6–15).
 
 N tracks carry mass ``p`` and M detections mass ``q``; a plan π moves exactly ``s`` of it at least cost
 (Eq. 6–7). One extra row and column turn that into a balanced problem (Eq. 8)::
@@ -19,6 +19,15 @@ Choices where the paper is silent (documented in the README):
   both extra masses positive (a zero mass has no logarithm);
 * bound: ``E`` is the gate, and costs above the gate are capped to ``E`` before solving, so an
   out-of-gate pair costs the same as leaving the detection unmatched (and exp(−C̄/γ) stays representable).
+
+The physical constraint (``cameras`` given): one track takes at most one detection per camera per frame —
+one camera sees one vehicle once. It is enforced in the decoding, not in the transport problem (whose
+marginals cannot express a per-(track, camera) cap): the candidate (track, detection) pairs are those the
+unconstrained decoding would accept — allowed by the gate, holding more of the column's mass than the extra
+row, and not in a column whose argmax is an out-of-gate track — taken greedily by plan mass (ties: lower
+cost, then lower indices), skipping a pair whose detection is taken or whose track already took a detection
+of that camera. A detection that loses its first track this way goes to the next track holding more of its
+mass than the extra row, if any, else stays unmatched. Without conflicts this is the unconstrained decoding.
 """
 
 from __future__ import annotations
@@ -123,11 +132,13 @@ def fota(
     gamma: float = GAMMA,
     iterations: int = ITERATIONS,
     track_mass: float = 2.0,
+    cameras: np.ndarray | None = None,
 ) -> FotaResult:
     """One-to-many assignment of M detections to N tracks (columns to rows of ``cost`` (N, M)).
 
     A pair is allowed when its cost is finite and ``≤ gate``. See the module docstring for the masses,
-    the transported mass s and the bound E (= ``gate``).
+    the transported mass s and the bound E (= ``gate``). ``cameras`` (M,): the camera of each detection;
+    when given, no track receives two detections of one camera.
     """
     n, m = cost.shape
     owner = np.full(m, UNMATCHED, dtype=np.int64)
@@ -148,4 +159,36 @@ def fota(
     columns = np.nonzero(matched)[0]
     keep = allowed[best[columns], columns]
     owner[columns[keep]] = best[columns[keep]]
+    if cameras is not None and _conflicts(owner, np.asarray(cameras)):
+        owner = _decode_one_per_camera(plan, allowed, best, np.asarray(cameras), capped)
     return FotaResult(owner, plan, s)
+
+
+def _conflicts(owner: np.ndarray, cameras: np.ndarray) -> bool:
+    """Whether some track got two detections of one camera."""
+    taken = owner != UNMATCHED
+    pairs = owner[taken] * (int(cameras.max(initial=0)) + 1) + cameras[taken]
+    return len(np.unique(pairs)) < len(pairs)
+
+
+def _decode_one_per_camera(plan: np.ndarray, allowed: np.ndarray, best: np.ndarray, cameras: np.ndarray,
+                           cost: np.ndarray) -> np.ndarray:
+    """Greedy decoding by plan mass under the one-detection-per-camera-per-track constraint (module
+    docstring)."""
+    n, m = allowed.shape
+    owner = np.full(m, UNMATCHED, dtype=np.int64)
+    real = plan[:n, :m]
+    blocked = (best < n) & ~allowed[np.minimum(best, n - 1), np.arange(m)]  # argmax is an out-of-gate track
+    candidate = allowed & (real > plan[n, :m][None, :]) & ~blocked[None, :]
+    rows, cols = np.nonzero(candidate)
+    if len(rows) == 0:
+        return owner
+    order = np.lexsort((cols, rows, cost[rows, cols], -real[rows, cols]))
+    taken: set[tuple[int, int]] = set()
+    for i, j in zip(rows[order].tolist(), cols[order].tolist(), strict=True):
+        key = (i, int(cameras[j]))
+        if owner[j] != UNMATCHED or key in taken:
+            continue
+        owner[j] = i
+        taken.add(key)
+    return owner

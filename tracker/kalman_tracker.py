@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from filterpy.kalman import KalmanFilter
@@ -33,18 +34,21 @@ Assigner = Callable[[np.ndarray, float], np.ndarray]
 
 @dataclass
 class KalmanTrack:
-    """One live track: id, class code, filter, life counters, and the cameras it was updated from."""
+    """One live track: id, class code, filter, life counters, the cameras it was updated from, and its motion
+    model (:mod:`.motion`'s constant velocity unless the tracker chooses per class)."""
 
     track_id: int
     label: int
     kf: KalmanFilter
     life: TrackLife
     cameras: set[int] = field(default_factory=set)
+    model: Any = motion
 
     def box(self) -> Box3D:
         """The filter's state as a world-frame box (velocity from the state) [m, rad, m/s]."""
         x = self.kf.x[:, 0]
-        return Box3D(*(float(v) for v in x[:7]), vx=float(x[7]), vy=float(x[8]))
+        vx, vy = self.model.velocity(x)
+        return Box3D(*(float(v) for v in x[:7]), vx=vx, vy=vy)
 
     def output(self) -> Track:
         return Track(track_id=self.track_id, label=ActorClass(LABELS[self.label]), score=self.life.score,
@@ -114,7 +118,7 @@ class KalmanTracker:
     def step_arrays(self, detections: DetectionArrays, dt: float) -> None:
         """Predict by ``dt`` seconds, associate, update, start and end tracks."""
         for track in self.tracks:
-            motion.predict(track.kf, dt, self.kalman)
+            track.model.predict(track.kf, dt, self.kalman)
         owner = self.associate(detections)
         scores = self.update(detections, owner)
         for index, track in enumerate(self.tracks):
@@ -153,10 +157,14 @@ class KalmanTracker:
             if i == UNMATCHED:
                 continue
             track = self.tracks[i]
-            motion.update(track.kf, detections.boxes3d[j, :7])
+            track.model.update(track.kf, detections.boxes3d[j, :7])
             track.cameras.add(int(detections.cameras[j]))
             scores[i] = max(scores.get(i, 0.0), float(detections.scores[j]))
         return scores
+
+    def motion_model(self, label: int):
+        """The motion model of a new track of class ``label``: constant velocity (:mod:`.motion`) here."""
+        return motion
 
     def keep_alive(self, detections: DetectionArrays, owner: np.ndarray, updated: dict[int, float]) -> None:
         """A hook after the life rule has seen the frame, for trackers that keep unmatched tracks alive
@@ -194,11 +202,13 @@ class KalmanTracker:
             box, camera, label = detections.boxes3d[j], int(detections.cameras[j]), int(detections.labels[j])
             twin = self._birth_twin(newborn, box, camera, label)
             if twin is not None:
-                motion.update(twin.kf, box[:7])
+                twin.model.update(twin.kf, box[:7])
                 twin.cameras.add(camera)
                 continue
-            kf = motion.new_filter(box, self.kalman)
-            track = KalmanTrack(self._next_id, label, kf, TrackLife(score=float(detections.scores[j])), {camera})
+            model = self.motion_model(label)
+            kf = model.new_filter(box, self.kalman)
+            track = KalmanTrack(self._next_id, label, kf, TrackLife(score=float(detections.scores[j])), {camera},
+                                model)
             self._next_id += 1
             newborn.append(track)
         self.tracks.extend(newborn)

@@ -93,3 +93,8 @@ def update(kf: KalmanFilter, z: np.ndarray) -> None:
 def innovation_covariances(P: np.ndarray, config: KalmanConfig) -> np.ndarray:
     """S = H P Hᵀ + R for a stack of state covariances ``P`` (N, 10, 10) → (N, 7, 7)."""
     return P[:, :MEASURED, :MEASURED] + config.measurement_noise
+
+
+def velocity(x: np.ndarray) -> tuple[float, float]:
+    """World-frame (vx, vy) [m/s] of a state (10,)."""
+    return float(x[7]), float(x[8])

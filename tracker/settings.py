@@ -16,13 +16,14 @@ def build_cost(cost: str, gate: float | None, **extra):
 
 
 def build_life(life: str, *, min_hits: int, max_age_s: float, min_score: float = 0.0) -> HitsAndAge | QueryLife:
-    """``life='hits'``: :class:`HitsAndAge` with these settings; ``'mutr3d'``: :class:`QueryLife` (τ_new 0.4,
-    τ_old 0.35, T = 5 frames)."""
+    """``life='hits'``: :class:`HitsAndAge` with these settings; ``'mutr3d'``: :class:`QueryLife` as MUTR3D's
+    §3.4 says (τ_new 0.4, τ_old 0.35, dead after T = 5 successive frames below τ_old); ``'mutr3d_code'``: the
+    same with the public code's miss count, reset only at a score ≥ τ_new."""
     if life not in LIFE_RULES:
         raise ValueError(f"unknown life rule {life!r}; known: {', '.join(LIFE_RULES)}")
     if life == "hits":
         return HitsAndAge(min_hits=int(min_hits), max_age_s=float(max_age_s), min_score=float(min_score))
-    return QueryLife()
+    return QueryLife(reset="paper" if life == "mutr3d" else "tau_new")
 
 
 def build_kalman(measurement_variance: float) -> KalmanConfig:

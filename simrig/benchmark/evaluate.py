@@ -1,14 +1,14 @@
 """What a bench worker does with one cell: find or generate its dataset, run each pending tracker, score it.
 
 Runs in a pool process or a Ray task, so it takes and returns plain picklable values. Tracks go to a
-temporary folder and are deleted; a cell's tracks can be made again exactly (same dataset, same seed).
+the scorer in memory and are not kept; a cell's tracks can be made again exactly (same dataset, same seed).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from simrig.pipeline.cache import cached_dataset
 from simrig.pipeline.guard import TrackerFault, TrackerTimeout
@@ -32,7 +32,9 @@ class BenchError(SimrigError):
 @dataclass(frozen=True)
 class Outcome:
     """One tracker on one cell: its metric values (NaN where not scored), its errors by cause as
-    (dimension, cause, kind, count) and the seconds it took (tracking ``step()``s, scoring)."""
+    (dimension, cause, kind, count), the seconds it took (tracking ``step()``s, scoring), how it was scored
+    (``3d``; ``2d``: a 2D tracker over every camera; or the one camera named) and its 2D metrics per camera
+    (:data:`CAMERA_METRICS` and the ignored ground truth)."""
 
     cell: str
     tracker_key: str
@@ -40,6 +42,8 @@ class Outcome:
     causes: tuple[tuple[str, str, str, int], ...]
     tracking_s: float
     scoring_s: float
+    scored: str = "3d"
+    per_camera: dict[str, dict[str, float]] = field(default_factory=dict)
     failure: str = ""
     """Why the tracker has no metrics on this cell (a timeout); empty when it ran to the end."""
 
@@ -71,7 +75,8 @@ def evaluate(job: Job) -> tuple[list[Outcome], float]:
         except Exception as error:  # a user's tracker failing: keep its traceback as the cause
             raise BenchError(f"{where}, tracker {entry.name}: {type(error).__name__}: {error}") from error
         outcomes.append(Outcome(job.cell, key, metric_values(report), cause_counts(report),
-                                run.step_seconds, time.perf_counter() - scoring_started))
+                                run.step_seconds, time.perf_counter() - scoring_started,
+                                scored_as(report, entry.camera), camera_values(report)))
     return outcomes, dataset_s
 
 
@@ -82,6 +87,27 @@ def metric_values(report: ScoreReport) -> dict[str, float]:
     values = {f"3d_{name}": overall3d.get(name) for name in METRICS_3D}
     values |= {f"2d_{name}": overall2d.get(name) for name in METRICS_2D}
     return {name: math.nan if value is None else float(value) for name, value in values.items()}
+
+
+def scored_as(report: ScoreReport, camera: str | None) -> str:
+    """``3d`` for a tracker scored in 3D, ``2d`` for a 2D-only tracker scored over every camera, or the one
+    camera it was scored on."""
+    if camera is not None:
+        return camera
+    return "3d" if report.metrics3d is not None else "2d"
+
+
+CAMERA_METRICS = ("HOTA", "AssA", "IDF1", "MOTA", "IDSW", "Frag", "CLR_TP", "CLR_FN", "CLR_FP")
+"""The 2D metrics kept per camera in the bench's ``cameras.parquet``."""
+
+
+def camera_values(report: ScoreReport) -> dict[str, dict[str, float]]:
+    """Per scored camera: :data:`CAMERA_METRICS` and how many ground-truth boxes were in view and ignored."""
+    ignored = report.metrics2d.get("ground_truth", {}).get("per_camera", {})
+    return {camera: {**{name: float(values[name]) for name in CAMERA_METRICS},
+                     "boxes": float(ignored.get(camera, {}).get("boxes", math.nan)),
+                     "ignored": float(ignored.get(camera, {}).get("ignored", math.nan))}
+            for camera, values in report.metrics2d["per_camera"].items()}
 
 
 def cause_counts(report: ScoreReport) -> tuple[tuple[str, str, str, int], ...]:

@@ -5,6 +5,7 @@ Layout of a bench folder::
     fragments/CELL/TRACKER_KEY.json   one finished tracker on one cell (written atomically)
     results.parquet                   one row per point × tracker (RESULTS columns + param.* + metrics + failure)
     causes.parquet                    errors by cause: one row per point × tracker × dimension × cause × kind
+    cameras.parquet                   2D metrics per point × tracker × camera (and the ground truth ignored there)
     timings.parquet                   seconds per cell × tracker (machine-dependent, so kept out of results)
     bench.json                        the suite, its cells' scenarios, and whether the tables are complete
 
@@ -25,17 +26,21 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ..dataset.manifest import write_json_atomic
-from .evaluate import METRIC_COLUMNS, Outcome
+from .evaluate import CAMERA_METRICS, METRIC_COLUMNS, Outcome
 from .plan import Plan, tracker_key
 
 FRAGMENTS = "fragments"
 RESULTS = "results.parquet"
 CAUSES = "causes.parquet"
 TIMINGS = "timings.parquet"
-TABLES = (RESULTS, CAUSES, TIMINGS)
+CAMERAS = "cameras.parquet"
+TABLES = (RESULTS, CAUSES, TIMINGS, CAMERAS)
 POINT_COLUMNS = ("suite", "scenario", "rig", "sweep", "value", "seed", "frames", "cell", "tracker", "scored")
 """Leading columns of both tables: ``sweep`` is the swept parameter ("" for a scenario's own settings),
-``scored`` is ``3d`` or the one camera a tracker is scored on."""
+``scored`` is ``3d``, ``2d`` (a 2D-only tracker scored over every camera) or the one camera a tracker is
+scored on."""
+CAMERA_COLUMNS = (*CAMERA_METRICS, "boxes", "ignored")
+"""Metric columns of ``cameras.parquet`` (``boxes``: ground truth in view; ``ignored``: of those, ignored)."""
 FAILURE = "failure"
 """Last column of the results: why a tracker has no metrics on a cell (``timeout: ...``); null when it ran."""
 PARAMETER_PREFIX = "param."
@@ -57,6 +62,8 @@ def write_fragment(out: Path, outcome: Outcome, dataset_s: float) -> None:
         "failure": outcome.failure,
         "seconds": {name: None if math.isnan(value) else value for name, value in
                     (("dataset", dataset_s), ("tracking", outcome.tracking_s), ("scoring", outcome.scoring_s))},
+        "scored": outcome.scored,
+        "per_camera": outcome.per_camera,
     })
 
 
@@ -76,13 +83,15 @@ def _read(out: Path, cell: str, key: str) -> dict:
 def assemble(plan: Plan, out: Path) -> dict[str, pa.Table]:
     """The results, causes and timings tables of every point of ``plan`` from the fragments in ``out``."""
     fragments = {(cell, key): _read(out, cell, key) for cell, pairs in plan.work().items() for key, _ in pairs}
-    rows, causes = [], []
+    rows, causes, cameras = [], [], []
     for point in plan.points:
         for entry in plan.trackers_of(plan.cells[point.cell][0]):
             fragment = fragments[(point.cell, tracker_key(entry))]
             head = {"suite": plan.suite.name, "scenario": point.scenario, "rig": point.rig, "sweep": point.sweep,
                     "value": point.value, "seed": point.seed, "frames": point.frames, "cell": point.cell,
-                    "tracker": entry.name, "scored": entry.camera or "3d"}
+                    "tracker": entry.name, "scored": fragment.get("scored", entry.camera or "3d")}
+            cameras += [head | {"camera": camera} | {name: values.get(name) for name in CAMERA_COLUMNS}
+                        for camera, values in fragment.get("per_camera", {}).items()]
             settings = {PARAMETER_PREFIX + name: value for name, value in point.settings}
             rows.append(head | settings | {name: fragment["metrics"][name] for name in METRIC_COLUMNS}
                         | {"failure": fragment.get("failure") or None})
@@ -94,6 +103,8 @@ def assemble(plan: Plan, out: Path) -> dict[str, pa.Table]:
     return {
         RESULTS: pa.Table.from_pylist(rows, schema=results_schema(plan.parameters)),
         CAUSES: pa.Table.from_pylist(causes, schema=causes_schema()),
+        CAMERAS: pa.Table.from_pylist(cameras, schema=pa.schema(
+            _point_fields() + [("camera", pa.string())] + [(name, pa.float64()) for name in CAMERA_COLUMNS])),
         TIMINGS: pa.Table.from_pylist(timings, schema=pa.schema([
             ("cell", pa.string()), ("tracker", pa.string()), ("dataset_s", pa.float64()),
             ("tracking_s", pa.float64()), ("scoring_s", pa.float64())])),

@@ -26,6 +26,7 @@ from ..types import (
     Rig,
     SensorFrame,
 )
+from .ground_truth import GroundTruth
 from .manifest import MANIFEST_NAME, folder_digest, read_manifest
 from .tables import SCHEMAS
 
@@ -167,58 +168,55 @@ class Dataset:
             for row, frame in enumerate(columns["frame"])
         ]
 
+    @cached_property
+    def ground_truth(self) -> GroundTruth:
+        """The whole ground truth as flat arrays (:class:`~simrig.dataset.ground_truth.GroundTruth`), read once
+        per :class:`Dataset` object by the one ground-truth reader."""
+        from .ground_truth import load_ground_truth
+
+        return load_ground_truth(self)
+
     def ground_truth_frames(self) -> Iterator[GroundTruthFrame]:
-        """Every frame's :class:`GroundTruthFrame`, in order, with per-camera projections."""
-        truth = self.table("ground_truth")
-        frames = truth.column("frame").to_numpy()
-        ids = truth.column("actor_id").to_numpy()
-        classes = np.asarray(truth.column("class").to_pylist(), dtype=object)
-        boxes = _stack(truth, BOX3D_FIELDS)
-        projections = self.table("projections")
-        proj_frames = projections.column("frame").to_numpy()
-        proj_boxes = _stack(projections, BOX2D_FIELDS)
-        truncation = projections.column("truncation").to_numpy()
-        depth = projections.column("depth").to_numpy()
-        in_view = projections.column("in_view").to_numpy(zero_copy_only=False)
-        occlusion = self.table("visibility").column("occlusion").to_numpy()
-        events = self.table("frames").column("events").to_pylist()
-        names = self.rig.camera_names
-        c = len(names)
-        for row, (frame, timestamp, pose) in enumerate(self._ego_rows()):
-            lo, hi = np.searchsorted(frames, [frame, frame + 1])
-            plo, phi = np.searchsorted(proj_frames, [frame, frame + 1])
-            n = hi - lo
-            if phi - plo != n * c:
-                raise DatasetError(
-                    f"{self.path}: frame {frame} has {n} actors but {phi - plo} projection rows ({c} cameras)"
-                )
+        """Every frame's :class:`GroundTruthFrame`, in order, with per-camera projections: views on
+        :attr:`ground_truth`."""
+        truth = self.ground_truth
+        for position, frame in enumerate(truth.frames):
+            rows = truth.frame_rows(position)
             per_camera = {
                 name: CameraGroundTruth(
-                    boxes=proj_boxes[plo:phi][index::c],
-                    truncation=truncation[plo:phi][index::c],
-                    depth=depth[plo:phi][index::c],
-                    in_view=in_view[plo:phi][index::c],
-                    occlusion=occlusion[plo:phi][index::c],
+                    boxes=truth.boxes2d[rows, index],
+                    truncation=truth.truncation[rows, index],
+                    depth=truth.depth[rows, index],
+                    in_view=truth.in_view[rows, index],
+                    occlusion=truth.occlusion[rows, index],
                 )
-                for index, name in enumerate(names)
+                for index, name in enumerate(truth.rig.camera_names)
             }
             yield GroundTruthFrame(
-                frame=frame,
-                timestamp=timestamp,
-                ego=pose,
-                actor_ids=ids[lo:hi],
-                classes=classes[lo:hi],
-                boxes=boxes[lo:hi],
+                frame=int(frame),
+                timestamp=float(truth.timestamps[position]),
+                ego=truth.egos[position],
+                actor_ids=truth.actor_id[rows],
+                classes=truth.label[rows],
+                boxes=truth.boxes[rows],
                 cameras=per_camera,
-                events=tuple(events[row]),
+                events=truth.events[position],
             )
+
+    @property
+    def image_folder(self) -> Path | None:
+        """The dataset's ``images/`` folder (one PNG per camera and frame), or ``None`` without images."""
+        folder = self.path / "images"
+        return folder if folder.is_dir() else None
 
     def sensor_frames(self) -> Iterator[SensorFrame]:
         """What a tracker sees, frame by frame: a :class:`SensorFrame` per frame that was not dropped (a
         dropped frame is skipped, so the tracker sees the time jump). No ground truth is in it.
 
         The frames carry their detections as arrays (rows sorted by camera in rig order, as written);
-        ``frame.detections`` builds :class:`~simrig.types.Detection` objects only if asked."""
+        ``frame.detections`` builds :class:`~simrig.types.Detection` objects only if asked. When the dataset
+        has images (generated with ``--images``), ``frame.images`` maps each camera to the path of its PNG for
+        that frame (``images/CAMERA/FFFFFF.png``, RGB, the camera's width × height); empty otherwise."""
         frames = self.table("frames")
         dropped = frames.column("dropped").to_numpy(zero_copy_only=False)
         table = self.table("detections")
@@ -234,6 +232,7 @@ class Dataset:
         label_codes = {label.value: code for code, label in enumerate(LABELS)}
         label_index = np.array([label_codes[label] for label in labels], dtype=np.int64)
         embeddings = _embedding_matrix(table.column("embedding"))
+        images = self.image_folder
         for row, (frame, timestamp, pose) in enumerate(self._ego_rows()):
             if dropped[row]:
                 continue
@@ -247,6 +246,8 @@ class Dataset:
                     boxes3d[lo:hi], boxes2d[lo:hi], scores[lo:hi], label_index[lo:hi], camera_index[lo:hi],
                     embeddings[lo:hi],
                 ),
+                images={} if images is None else {name: str(images / name / f"{frame:06d}.png")
+                                                  for name in rig.camera_names},
             )
 
     def summary(self) -> str:

@@ -13,14 +13,17 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from simrig.dataset.tracks_file import TrackRows, TrackSet, read_tracks
+from simrig.scenarios.evaluation_schema import EvaluationConfig
 
 from ..dataset import Dataset
+from ..dataset.evaluation import evaluation_of, ignore_rules
+from ..dataset.ground_truth import GroundTruth, project_tracks
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import check_output_path, partial_sibling, remove_stale_partials
 from ..errors import SimrigError
-from ..scoring.ground_truth import GroundTruth, load_ground_truth
-from ..scoring.inputs import project_tracks
 
 
 class ExportError(SimrigError):
@@ -29,11 +32,15 @@ class ExportError(SimrigError):
 
 @dataclass(frozen=True, eq=False)
 class ExportInput:
-    """What every format gets: the dataset, its ground truth, and the tracker's rows (``None`` without
-    ``--tracks``): ``rows2d`` as the scorer compares them, ``rows3d`` when the tracker gave 3D boxes."""
+    """What every format gets: the dataset, its ground truth, the :class:`~simrig.dataset.evaluation.IgnoreRule`
+    bits of every box ``(R, C)`` (what ``simrig score`` ignores with the same settings), and the tracker's rows
+    (``None`` without ``--tracks``): ``rows2d`` as the scorer compares them, ``rows3d`` when the tracker gave 3D
+    boxes."""
 
     dataset: Dataset
     truth: GroundTruth
+    evaluation: EvaluationConfig
+    ignored: np.ndarray
     rows2d: TrackRows | None
     rows3d: TrackRows | None
     tracker_name: str
@@ -51,8 +58,10 @@ MARKER = "simrig-export.json"
 
 
 def export(dataset: Dataset | Path | str, fmt: str, out: Path | str, *, tracks: Path | str | None = None,
-           overwrite: bool = False) -> Path:
-    """Write ``dataset`` (and ``tracks``, a tracks folder or file) in format ``fmt`` to the folder ``out``."""
+           overwrite: bool = False, evaluation: dict | None = None) -> Path:
+    """Write ``dataset`` (and ``tracks``, a tracks folder or file) in format ``fmt`` to the folder ``out``;
+    ``evaluation``: keys on top of the dataset scenario's ``[evaluation]`` table, as ``simrig score`` takes
+    them (the ground truth it ignores is written as each format's distractors)."""
     if fmt not in FORMATS:
         raise ExportError(f"--format {fmt!r}: known formats are {', '.join(FORMATS)}")
     if not isinstance(dataset, Dataset):
@@ -64,7 +73,9 @@ def export(dataset: Dataset | Path | str, fmt: str, out: Path | str, *, tracks: 
         if not (out / MARKER).is_file():
             raise ExportError(f"--out {str(out)!r} was not written by simrig export (it has no {MARKER}); "
                               "--overwrite replaces only an earlier export: choose another folder")
-    truth = load_ground_truth(dataset)
+    truth = dataset.ground_truth
+    config = evaluation_of(dataset.scenario, evaluation)
+    ignored = ignore_rules(truth, config)
     rows2d = rows3d = None
     name = "tracker"
     if tracks is not None:
@@ -75,7 +86,7 @@ def export(dataset: Dataset | Path | str, fmt: str, out: Path | str, *, tracks: 
         elif rows3d is not None:
             rows2d = project_tracks(truth, rows3d)
         name = Path(tracks).stem if Path(tracks).is_file() else Path(tracks).name
-    data = ExportInput(dataset, truth, rows2d, rows3d, name)
+    data = ExportInput(dataset, truth, config, ignored, rows2d, rows3d, name)
     out.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_partials(out)
     partial = partial_sibling(out)

@@ -7,9 +7,15 @@ tracks, ``OUT/CAMERA/NAME/0000.txt`` — one sequence, every frame, space-separa
 Frames from 0; pixel boxes; 3D in the camera frame (x right, y down, z forward; location = bottom centre of the
 box [m]; rotation_y [rad] about the camera's y axis, 0 facing +x; alpha = rotation_y − atan2(x, z)). Types:
 car → ``Car``, truck → ``Truck``, bus → ``Misc``, motorcycle → ``Cyclist`` (KITTI has no bus or motorcycle
-class). ``truncated`` is the projected box's fraction outside the image; ``occluded`` the KITTI level from
-the rendered occlusion ratio (0: < 0.1, 1: < 0.5, 2: ≥ 0.5, 3: not rendered). A tracker's rows carry its
-pixel box and score; their 3D fields are KITTI's "unknown" values (−1, −1000, −10).
+class). ``truncated`` is the KITTI tracking level from the projected box's fraction outside the image
+(0: inside the image, 1: up to 0.5 outside, 2: more); ``occluded`` the KITTI level from the rendered occlusion
+ratio (0: < 0.1, 1: < 0.5, 2: ≥ 0.5, 3: not rendered). Ground truth the evaluation region ignores (as
+``simrig score`` with the same settings) is written as KITTI's ``DontCare`` (id −1, its pixel box, the other
+fields unknown). A tracker's rows carry its pixel box and score; their 3D fields are KITTI's "unknown" values
+(−1, −1000, −10). TrackEval's KITTI reader applies KITTI's own rules to these files (only ``Car`` is evaluated
+there, a ``DontCare`` region removes unmatched tracker boxes mostly inside it, truncated or heavily occluded
+cars are distractors, unmatched tracker boxes ≤ 25 px are dropped), so its numbers differ from ``simrig
+score``'s; the MOTChallenge export is the one that reproduces them.
 """
 
 from __future__ import annotations
@@ -21,6 +27,8 @@ import numpy as np
 from .api import ExportInput
 
 KITTI_TYPE = {"car": "Car", "truck": "Truck", "bus": "Misc", "motorcycle": "Cyclist"}
+TRUNCATION_LEVELS = (1e-9, 0.5)
+"""Upper bounds of KITTI tracking's truncation levels 0 (inside the image) and 1 (partly); above: 2 (heavily)."""
 
 
 def _keyed(table, camera: str, frame: np.ndarray, actor: np.ndarray, column: str, missing: float) -> np.ndarray:
@@ -68,13 +76,19 @@ def write(data: ExportInput, out: Path) -> None:
         truncated = _keyed(projections, camera, truth.frame[rows], truth.actor_id[rows], "truncation", 0.0)
         occlusion = _keyed(visibility, camera, truth.frame[rows], truth.actor_id[rows], "occlusion", np.nan)
         occluded = np.where(np.isnan(occlusion), 3, np.digitize(np.nan_to_num(occlusion), [0.1, 0.5]))
+        truncation_level = np.digitize(truncated, TRUNCATION_LEVELS, right=True)
         dimensions, location, rotation = camera_boxes(truth, rows, c)
         alpha = _wrap(rotation - np.arctan2(location[:, 0], location[:, 2]))
         lines = []
         for k, r in enumerate(rows):
             b = truth.boxes2d[r, c]
+            if data.ignored[r, c]:
+                lines.append(f"{truth.frame[r]} -1 DontCare -1 -1 -10 {b[0]:.4f} {b[1]:.4f} {b[2]:.4f} {b[3]:.4f} "
+                             "-1 -1 -1 -1000 -1000 -1000 -10\n")
+                continue
             lines.append(
-                f"{truth.frame[r]} {truth.actor_id[r]} {KITTI_TYPE[truth.label[r]]} {truncated[k]:.4f} {occluded[k]} "
+                f"{truth.frame[r]} {truth.actor_id[r]} {KITTI_TYPE[truth.label[r]]} {truncation_level[k]} "
+                f"{occluded[k]} "
                 f"{alpha[k]:.6f} {b[0]:.4f} {b[1]:.4f} {b[2]:.4f} {b[3]:.4f} "
                 + " ".join(f"{v:.4f}" for v in (*dimensions[k], *location[k])) + f" {rotation[k]:.6f}\n")
         folder = out / camera / "label_02"

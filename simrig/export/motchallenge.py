@@ -4,9 +4,12 @@
 ``OUT/gt/mot_challenge/seqmaps/SIMRIG-test.txt`` and, with tracks,
 ``OUT/trackers/mot_challenge/SIMRIG-test/NAME/data/CAMERA-CLASS.txt``. One sequence per (camera, class): simrig
 matches within a class, and TrackEval's combined result over the sequences then equals ``simrig score``'s
-overall one. Rows: ``frame, id, left, top, width, height, conf, class, visibility`` with frames from 1 (the
-dataset's frame + 1), pixel boxes; the class column is 1 on both sides, the one class TrackEval's MOT reader
-evaluates (the real class is in the sequence name). Evaluate with
+overall one (class-agnostic settings, ``classes = "any"``: one sequence per camera, ``CAMERA-any``). Rows:
+``frame, id, left, top, width, height, conf, class, visibility`` with frames from 1 (the dataset's frame + 1),
+pixel boxes; the class column is 1 (``pedestrian``, the one class TrackEval's MOT reader evaluates; the real
+class is in the sequence name) on both sides, and 8 (``distractor``) for ground truth the evaluation region
+ignores: TrackEval's preprocessing then removes the tracker boxes matched to it and the box itself, exactly
+as ``simrig score`` does. Evaluate with
 ``trackeval.datasets.MotChallenge2DBox({"GT_FOLDER": OUT/gt/mot_challenge, "TRACKERS_FOLDER":
 OUT/trackers/mot_challenge, "BENCHMARK": "SIMRIG", "SPLIT_TO_EVAL": "test"})``.
 """
@@ -20,13 +23,16 @@ import numpy as np
 from .api import ExportInput
 
 BENCHMARK, SPLIT = "SIMRIG", "test"
+EVALUATED_CLASS, DISTRACTOR_CLASS = 1, 8
+"""MOTChallenge class ids: ``pedestrian`` (evaluated) and ``distractor`` (TrackEval's ``distractor_classes``)."""
 
 
-def _lines(frame, ids, boxes, conf, extra: str) -> str:
+def _lines(frame, ids, boxes, conf, classes, visibility: int) -> str:
     order = np.lexsort((ids, frame))
     return "".join(
-        f"{int(f) + 1},{int(i)},{b[0]:.17g},{b[1]:.17g},{b[2] - b[0]:.17g},{b[3] - b[1]:.17g},{c:.6g},{extra}\n"
-        for f, i, b, c in zip(frame[order], ids[order], boxes[order], conf[order], strict=True)
+        f"{int(f) + 1},{int(i)},{b[0]:.17g},{b[1]:.17g},{b[2] - b[0]:.17g},{b[3] - b[1]:.17g},{c:.6g},{k},"
+        f"{visibility}\n"
+        for f, i, b, c, k in zip(frame[order], ids[order], boxes[order], conf[order], classes[order], strict=True)
     )
 
 
@@ -35,6 +41,7 @@ def write(data: ExportInput, out: Path) -> None:
     gt_root = out / "gt" / "mot_challenge"
     sequences = []
     frame_rate = float(data.dataset.scenario["frame_rate_hz"])
+    agnostic = data.evaluation.classes == "any"
     for c, camera in enumerate(rig.camera_names):
         gt_rows = np.nonzero(truth.in_view[:, c])[0]
         labels = set(truth.label[gt_rows].tolist())
@@ -42,24 +49,28 @@ def write(data: ExportInput, out: Path) -> None:
         if data.rows2d is not None:
             track_rows = np.nonzero(data.rows2d.camera == camera)[0]
             labels |= set(data.rows2d.label[track_rows].tolist())
+        if agnostic:
+            labels = {"any"} if labels else set()
         cam = rig.camera(camera)
         for label in sorted(labels):
             name = f"{camera}-{label}"
             sequences.append(name)
-            g = gt_rows[truth.label[gt_rows] == label]
+            g = gt_rows if agnostic else gt_rows[truth.label[gt_rows] == label]
+            classes = np.where(data.ignored[g, c] != 0, DISTRACTOR_CLASS, EVALUATED_CLASS)
             folder = gt_root / f"{BENCHMARK}-{SPLIT}" / name
             (folder / "gt").mkdir(parents=True)
             (folder / "gt" / "gt.txt").write_text(
-                _lines(truth.frame[g], truth.actor_id[g], truth.boxes2d[g, c], np.ones(len(g)), "1,1"))
+                _lines(truth.frame[g], truth.actor_id[g], truth.boxes2d[g, c], np.ones(len(g)), classes, 1))
             (folder / "seqinfo.ini").write_text(
                 f"[Sequence]\nname={name}\nseqLength={len(truth.frames)}\nframeRate={frame_rate:g}\n"
                 f"imWidth={cam.width}\nimHeight={cam.height}\nimExt=.png\n")
             if data.rows2d is not None:
-                t = track_rows[data.rows2d.label[track_rows] == label]
+                t = track_rows if agnostic else track_rows[data.rows2d.label[track_rows] == label]
                 folder = out / "trackers" / "mot_challenge" / f"{BENCHMARK}-{SPLIT}" / data.tracker_name / "data"
                 folder.mkdir(parents=True, exist_ok=True)
                 rows = data.rows2d
                 (folder / f"{name}.txt").write_text(
-                    _lines(rows.frame[t], rows.track_id[t], rows.boxes[t], rows.score[t], "1,-1"))
+                    _lines(rows.frame[t], rows.track_id[t], rows.boxes[t], rows.score[t],
+                           np.full(len(t), EVALUATED_CLASS), -1))
     (gt_root / "seqmaps").mkdir(parents=True)
     (gt_root / "seqmaps" / f"{BENCHMARK}-{SPLIT}.txt").write_text("name\n" + "".join(f"{s}\n" for s in sequences))

@@ -15,13 +15,15 @@ from pathlib import Path
 
 import numpy as np
 
+from simrig.dataset.tracks_nuscenes import sample_token
+
 from .api import ExportError, ExportInput
 
 META = {"use_camera": True, "use_lidar": False, "use_radar": False, "use_map": False, "use_external": False}
 
 
 def token(data: ExportInput, frame: int) -> str:
-    return f"{data.dataset.scenario['name']}-seed{data.dataset.seed}-{int(frame):06d}"
+    return sample_token(data.dataset.scenario["name"], data.dataset.seed, frame)
 
 
 def results(data: ExportInput, frame, ids, labels, boxes, scores) -> dict:

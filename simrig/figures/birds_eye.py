@@ -21,11 +21,8 @@ MARGIN_M = 10.0
 """[m] around the ground-truth and ego trajectories."""
 
 
-def _paths(table: pa.Table, key: str) -> dict[int, np.ndarray]:
-    """``(K, 2)`` world (x, y) [m] per id, in frame order."""
-    ids = table.column(key).to_numpy()
-    frames = table.column("frame").to_numpy()
-    xy = np.column_stack([table.column("x").to_numpy(), table.column("y").to_numpy()])
+def _paths(ids: np.ndarray, frames: np.ndarray, xy: np.ndarray) -> dict[int, np.ndarray]:
+    """``(K, 2)`` world (x, y) [m] per id, in frame order, from rows of (id, frame, (x, y))."""
     order = np.lexsort((frames, ids))
     ids, xy = ids[order], xy[order]
     starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
@@ -36,10 +33,9 @@ def plot_bev(dataset: Dataset, tracks3d: pa.Table | None, switches: list[tuple[i
              out: Path) -> Path:
     """Ground truth (grey), the ego (black), tracks (a colour per track id) and identity switches (red ×,
     each with its number in ``switches``, a list of (frame, actor id) in the order they are numbered)."""
-    truth = dataset.table("ground_truth")
-    ego = dataset.table("ego_poses")
-    truth_paths = _paths(truth, "actor_id")
-    points = [np.column_stack([ego.column("x").to_numpy(), ego.column("y").to_numpy()])]
+    truth = dataset.ground_truth
+    truth_paths = _paths(truth.actor_id, truth.frame, truth.boxes[:, :2])
+    points = [np.array([(ego.x, ego.y) for ego in truth.egos]).reshape(-1, 2)]
     points += list(truth_paths.values())
     everything = np.concatenate(points)  # the view fits the road traffic; a track that wanders off is cut
     low, high = everything.min(axis=0) - MARGIN_M, everything.max(axis=0) + MARGIN_M
@@ -56,15 +52,16 @@ def plot_bev(dataset: Dataset, tracks3d: pa.Table | None, switches: list[tuple[i
         axis.plot(path[:, 0], path[:, 1], color="0.55", linewidth=2.4, alpha=0.5, solid_capstyle="round")
     axis.plot(points[0][:, 0], points[0][:, 1], color="black", linewidth=1.5, label="ego")
     if tracks3d is not None:
-        for track_id, path in _paths(tracks3d, "track_id").items():
+        xy = np.column_stack([tracks3d.column("x").to_numpy(), tracks3d.column("y").to_numpy()])
+        for track_id, path in _paths(tracks3d.column("track_id").to_numpy(), tracks3d.column("frame").to_numpy(),
+                                     xy).items():
             axis.plot(path[:, 0], path[:, 1], color=identity_colour(track_id), linewidth=0.9)
-    position = {(f, a): (x, y) for f, a, x, y in zip(
-        truth.column("frame").to_pylist(), truth.column("actor_id").to_pylist(),
-        truth.column("x").to_pylist(), truth.column("y").to_pylist(), strict=True)}
-    for number, key in enumerate(switches, start=1):
-        if key not in position:
+    for number, (frame, actor) in enumerate(switches, start=1):
+        try:
+            row = truth.rows_of(np.array([frame]), np.array([actor]))[0]
+        except KeyError:
             continue
-        x, y = position[key]
+        x, y = truth.boxes[row, :2]
         axis.plot(x, y, marker="x", color="red", markersize=10, markeredgewidth=2.2,
                   label="identity switch (numbered)" if number == 1 else None)
         axis.annotate(str(number), (x, y), textcoords="offset points", xytext=(4, 5), fontsize=8, color="darkred")
@@ -75,7 +72,8 @@ def plot_bev(dataset: Dataset, tracks3d: pa.Table | None, switches: list[tuple[i
     axis.set_ylabel("world y [m]")
     axis.set_title(title + ("" if equal else " (axes not to scale)"), fontsize=10)
     axis.plot([], [], color="0.55", linewidth=2.4, alpha=0.5, label="ground truth")
-    axis.plot([], [], color="tab:blue", linewidth=0.9, label="tracks (a colour per id)")
+    axis.plot([], [], color="tab:blue", linewidth=0.9, linestyle="-" if tracks3d is not None else "none",
+              label="tracks (a colour per id)" if tracks3d is not None else "no 3D tracks (a 2D tracker)")
     axis.legend(fontsize=8, loc="upper left")
     figure.tight_layout()
     figure.savefig(out)

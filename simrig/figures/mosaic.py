@@ -4,7 +4,9 @@ coloured by identity, and a bird's-eye panel of the same frame.
 Camera images come from the dataset's ``images/`` when it was generated with ``--images``; otherwise they
 are rendered now from the stored ground truth and road (same scene, same pixels as ``--images`` gives).
 Solid boxes are ground truth, dashed boxes detections (coloured by the actor that caused them; red for
-false positives).
+false positives). With ``--tracks`` (a tracker's output in any format ``simrig score`` reads), dotted boxes
+labelled ``T<id>`` are the tracker's — each track id in its own stable colour — in every camera (its own 2D
+boxes, or its 3D boxes projected as the scorer projects them) and, for a 3D tracker, in the bird's-eye panel.
 """
 
 from __future__ import annotations
@@ -36,6 +38,27 @@ CLUTTER_COLOUR = (0.9, 0.1, 0.1)
 def identity_colour(actor_id: int) -> tuple[float, float, float]:
     """A stable colour per actor id (tab20)."""
     return plt.cm.tab20(int(actor_id) % 20)[:3]
+
+
+def track_colour(track_id: int) -> tuple[float, float, float]:
+    """A stable colour per track id (tab10, so that a track and the actor it follows rarely look alike)."""
+    return plt.cm.tab10(int(track_id) % 10)[:3]
+
+
+def _frame_tracks(dataset: Dataset, tracks, frame: int):
+    """(per camera: [(pixel box, track id)], [(world box, track id)]) of a tracker's rows at ``frame``."""
+    if tracks is None:
+        return {}, []
+    from simrig.dataset.tracks_formats import dataset_tracks
+
+    rows3d, rows2d = dataset_tracks(dataset, tracks)
+    per_camera: dict[str, list] = {}
+    if rows2d is not None:
+        for k in np.nonzero(rows2d.frame == frame)[0]:
+            per_camera.setdefault(str(rows2d.camera[k]), []).append((rows2d.boxes[k], int(rows2d.track_id[k])))
+    world = [] if rows3d is None else [(rows3d.boxes[k], int(rows3d.track_id[k]))
+                                       for k in np.nonzero(rows3d.frame == frame)[0]]
+    return per_camera, world
 
 
 def _layout(names: tuple[str, ...]) -> list[list[str]]:
@@ -79,7 +102,7 @@ def _box_patch(box: np.ndarray, colour, dashed: bool) -> Rectangle:
                      linestyle="--" if dashed else "-")
 
 
-def _draw_bev(axis, dataset: Dataset, state: GroundTruthFrame, detections) -> None:
+def _draw_bev(axis, dataset: Dataset, state: GroundTruthFrame, detections, tracks3d=()) -> None:
     ego = state.ego
     rotation = np.array([[np.cos(-ego.yaw), -np.sin(-ego.yaw)], [np.sin(-ego.yaw), np.cos(-ego.yaw)]])
 
@@ -107,6 +130,13 @@ def _draw_bev(axis, dataset: Dataset, state: GroundTruthFrame, detections) -> No
             colour = CLUTTER_COLOUR if actor_id < 0 else identity_colour(actor_id)
             corners = to_ego(box_corners(box3d[None])[0, :4, :2])
             axis.add_patch(Polygon(corners, closed=True, fill=False, edgecolor=colour, linestyle="--", linewidth=0.9))
+    for box3d, track_id in tracks3d:
+        corners = to_ego(box_corners(box3d[None, :7])[0, :4, :2])
+        axis.add_patch(Polygon(corners, closed=True, fill=False, edgecolor=track_colour(track_id), linestyle=":",
+                               linewidth=1.6))
+        centre = corners.mean(axis=0)
+        if np.abs(centre).max() < BEV_RANGE_M:
+            axis.text(centre[0], centre[1] + 2.5, f"T{track_id}", fontsize=6, ha="center", color=track_colour(track_id))
     axis.add_patch(Rectangle((-2.3, -0.95), 4.6, 1.9, facecolor="black"))
     axis.set_xlim(-BEV_RANGE_M, BEV_RANGE_M)
     axis.set_ylim(-BEV_RANGE_M, BEV_RANGE_M)
@@ -115,14 +145,16 @@ def _draw_bev(axis, dataset: Dataset, state: GroundTruthFrame, detections) -> No
     axis.tick_params(labelsize=7)
 
 
-def render_mosaic(dataset_path: Path | str, frame: int, out: Path | str) -> Path:
-    """Write the mosaic PNG of ``frame`` of the dataset at ``dataset_path`` to ``out``; returns ``out``."""
+def render_mosaic(dataset_path: Path | str, frame: int, out: Path | str, tracks: Path | str | None = None) -> Path:
+    """Write the mosaic PNG of ``frame`` of the dataset at ``dataset_path`` to ``out`` (with ``tracks``, a
+    tracker's output in any format ``simrig score`` reads, drawn too); returns ``out``."""
     dataset = Dataset.open(dataset_path)
     if not 0 <= frame < dataset.frame_count:
         raise DatasetError(f"--frame: {frame} is outside the dataset's frames 0 … {dataset.frame_count - 1}")
     state = next(f for i, f in enumerate(dataset.ground_truth_frames()) if i == frame)
     images = _camera_images(dataset, state)
     detections = _detections(dataset, frame)
+    tracks2d, tracks3d = _frame_tracks(dataset, tracks, frame)
     layout = _layout(dataset.rig.camera_names)
     rows, columns = len(layout), max(len(row) for row in layout)
     camera = dataset.rig.cameras[0]
@@ -142,13 +174,20 @@ def render_mosaic(dataset_path: Path | str, frame: int, out: Path | str) -> Path
             for box2d, _, actor_id in detections.get(name, []):
                 colour = CLUTTER_COLOUR if actor_id < 0 else identity_colour(actor_id)
                 axis.add_patch(_box_patch(box2d, colour, dashed=True))
-            axis.set_title(f"{name}: {int(truth.in_view.sum())} in view, {len(detections.get(name, []))} detections",
-                           fontsize=8)
+            for box2d, track_id in tracks2d.get(name, []):
+                x1, y1, x2, y2 = box2d
+                axis.add_patch(Rectangle((x1, y1), x2 - x1, y2 - y1, fill=False, edgecolor=track_colour(track_id),
+                                         linewidth=1.8, linestyle=":"))
+                axis.text(x1, y1 - 3, f"T{track_id}", fontsize=5, color=track_colour(track_id), va="bottom")
+            tracked = f", {len(tracks2d.get(name, []))} tracks" if tracks is not None else ""
+            axis.set_title(f"{name}: {int(truth.in_view.sum())} in view, {len(detections.get(name, []))} detections"
+                           f"{tracked}", fontsize=8)
             axis.set_axis_off()
-    _draw_bev(figure.add_subplot(grid[:, columns]), dataset, state, detections)
+    _draw_bev(figure.add_subplot(grid[:, columns]), dataset, state, detections, tracks3d)
     scenario = dataset.scenario["name"]
     figure.suptitle(f"{scenario}, seed {dataset.seed}, frame {frame} (t = {state.timestamp:.1f} s); solid: ground "
-                    "truth, dashed: detections (red: false positives)", fontsize=10)
+                    "truth, dashed: detections (red: false positives)"
+                    + (", dotted: tracks (T<id>)" if tracks is not None else ""), fontsize=10)
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(out, bbox_inches="tight")

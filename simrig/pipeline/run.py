@@ -97,9 +97,12 @@ def run_pipeline(
     progress: bool = False,
     camera: str | None = None,
     frame_time_limit_s: float | None = FRAME_TIME_LIMIT_S,
+    images: bool = False,
 ) -> PipelineResult:
     """Generate ``scenario`` with ``seed`` (or reuse the matching complete dataset in ``out/dataset``), run
-    ``tracker`` with ``params`` on it, score (only ``camera``, in 2D, when given) and report.
+    ``tracker`` with ``params`` on it, score (only ``camera``, in 2D, when given) and report. ``images``: the
+    dataset has a PNG per camera and frame, handed to the tracker in each
+    :class:`~simrig.types.SensorFrame`'s ``images`` (a reused dataset without images is generated again).
 
     The tracker is built before generating, so a bad tracker name or parameter fails at once. ``overwrite``
     regenerates the dataset even when it matches (and replaces one that does not)."""
@@ -109,17 +112,20 @@ def run_pipeline(
     frame_count = loaded.frames if frames is None else frames
     folder = out / DATASET_DIR
     matches = _matching_dataset(folder, loaded, seed, frame_count)
+    if matches and images and Dataset.open(folder).image_folder is None:
+        matches = False  # the same world, but without the images this run asks for
     reused = bool(matches) and not overwrite
     generation_s = None
     if not reused:
         if matches is False and not overwrite:
             manifest = read_manifest(folder)  # a damaged one raises its own one-line error here
             raise DatasetExistsError(
-                f"{str(folder)!r} holds a dataset of another scenario, seed or frame count "
-                f"({manifest['scenario']['name']}, seed {manifest['seed']}, {manifest['frames']} frames); "
+                f"{str(folder)!r} holds a dataset of another scenario, seed or frame count, or without images "
+                f"({manifest['scenario']['name']}, seed {manifest['seed']}, {manifest['frames']} frames"
+                f"{', no images' if images else ''}); "
                 "pass --overwrite to replace it or choose another --out")
         started = time.perf_counter()
-        generate(loaded, seed=seed, out=folder, frames=frames, overwrite=overwrite, progress=progress)
+        generate(loaded, seed=seed, out=folder, frames=frames, overwrite=overwrite, progress=progress, images=images)
         generation_s = time.perf_counter() - started
     dataset = Dataset.open(folder)
     label = run_label(tracker, params, camera)
@@ -133,7 +139,7 @@ def run_pipeline(
     partial = errors_path.with_name(f".{errors_path.name}.partial-{os.getpid()}")
     report.write_errors(partial)
     os.replace(partial, errors_path)
-    command = _command(scenario, seed, tracker, params, frames, camera)
+    command = _command(scenario, seed, tracker, params, frames, camera, images)
     _write_text_atomic(markdown, f"## {loaded.name}, seed {seed}, tracker {tracker}\n\n"
                                  f"Produced by `{command}`.\n\n```\n{report.table()}\n```\n")
     write_json_atomic(scores / "timings.json", {
@@ -159,7 +165,7 @@ def _write_text_atomic(path: Path, text: str) -> None:
     os.replace(partial, path)
 
 
-def _command(scenario, seed, tracker, params, frames, camera=None) -> str:
+def _command(scenario, seed, tracker, params, frames, camera=None, images=False) -> str:
     """The command that reproduces a run, with ``--out`` left for the reader (no path in a results file)."""
     words = ["simrig", "run", str(scenario.name if isinstance(scenario, Scenario) else scenario),
              "--seed", str(seed), "--tracker", tracker]
@@ -169,4 +175,6 @@ def _command(scenario, seed, tracker, params, frames, camera=None) -> str:
         words += ["--frames", str(frames)]
     if camera is not None:
         words += ["--camera", camera]
+    if images:
+        words += ["--images"]
     return shlex.join(words) + " --out THIS_FOLDER"

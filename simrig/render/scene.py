@@ -19,8 +19,8 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")  # headless: must precede the 
 
 import numpy as np  # noqa: E402
 
-if not hasattr(np, "infty"):  # pyrender 0.1.45 still uses np.infty, removed in numpy 2
-    np.inf = np.inf
+if "infty" not in np.__dict__:  # pyrender 0.1.45 still uses np.infty (scene bounds), removed in numpy 2
+    np.infty = np.inf  # noqa: NPY201  (without the noqa, ruff --fix rewrites this line into a no-op)
 
 import pyrender  # noqa: E402
 import trimesh  # noqa: E402
@@ -29,6 +29,7 @@ from ..geometry import camera_from_world  # noqa: E402
 from ..road import RoadMarkings  # noqa: E402
 from ..types import ActorClass, Camera, EgoPose, Rig  # noqa: E402
 from .road import GROUND_HALF_SIZE_M, painted_quads  # noqa: E402
+from .segmentation import SegmentationPass  # noqa: E402
 from .shapes import unit_parts  # noqa: E402
 
 OPENCV_TO_OPENGL = np.diag([1.0, -1.0, -1.0, 1.0])
@@ -65,27 +66,12 @@ def _class_mesh(actor_class: ActorClass) -> pyrender.Mesh:
     return pyrender.Mesh.from_trimesh(trimesh.util.concatenate(pieces), material=material, smooth=False)
 
 
-def seg_colour(slot: int) -> np.ndarray:
-    """The exact 24-bit colour of node ``slot`` in a segmentation render (0 is the background).
-
-    >>> seg_colour(0).tolist(), seg_colour(256).tolist()
-    ([0, 0, 1], [0, 1, 1])
-    """
-    value = slot + 1
-    return np.array([(value >> 16) & 255, (value >> 8) & 255, value & 255], dtype=np.uint8)
-
-
-def decode_segmentation(image: np.ndarray) -> np.ndarray:
-    """``(H, W)`` node slot of every pixel of a segmentation render, −1 for the background."""
-    image = image.astype(np.int32)
-    return ((image[..., 0] << 16) | (image[..., 1] << 8) | image[..., 2]) - 1
-
-
 class RigScene:
     """One scene per run: a pool of vehicle nodes per class, the road, and a camera node.
 
     Call :meth:`set_frame` with the frame's actors, then :meth:`visible_pixel_counts` or :meth:`colour`
-    per camera. Nodes are reused across frames (poses are updated, nothing is rebuilt).
+    per camera. Segmentation renders draw all actors in one call (:mod:`.segmentation`); colour renders
+    draw the node pools, which are reused across frames (poses are updated, nothing is rebuilt).
     """
 
     def __init__(self, markings: RoadMarkings | None = None):
@@ -93,8 +79,13 @@ class RigScene:
         self.scene = pyrender.Scene(bg_color=(0.62, 0.75, 0.88, 1.0), ambient_light=(0.35, 0.35, 0.35))
         self._meshes = {actor_class: _class_mesh(actor_class) for actor_class in ActorClass}
         self._pools: dict[ActorClass, list[pyrender.Node]] = {actor_class: [] for actor_class in ActorClass}
-        self._slot_of: dict[pyrender.Node, int] = {}
-        self._active: list[pyrender.Node] = []
+        self.renderer._platform.make_current()  # the pass's buffers and shader live in pyrender's context
+        self._segmentation = SegmentationPass(
+            {actor_class: _triangle_positions(mesh) for actor_class, mesh in self._meshes.items()}
+        )
+        self._classes: list[ActorClass] = []
+        self._poses = np.zeros((0, 4, 4))
+        self._segmentation_stale = self._nodes_stale = False
         self._camera_node: pyrender.Node | None = None
         self._camera_key: tuple | None = None
         self.scene.add(pyrender.DirectionalLight(color=np.ones(3), intensity=3.0), pose=_sun_pose())
@@ -107,31 +98,36 @@ class RigScene:
     def _node(self, actor_class: ActorClass, index: int) -> pyrender.Node:
         pool = self._pools[actor_class]
         while len(pool) <= index:
-            node = self.scene.add(self._meshes[actor_class], pose=_parked())
-            self._slot_of[node] = len(self._slot_of)
-            pool.append(node)
+            pool.append(self.scene.add(self._meshes[actor_class], pose=_parked()))
         return pool[index]
 
     def set_frame(self, ego: EgoPose, classes: np.ndarray, boxes: np.ndarray) -> None:
         """Place the frame's actors: ``classes`` ``(N,)`` names, ``boxes`` ``(N, ≥7)`` world-frame boxes
         (centre [m], size [m], yaw [rad]); the ego itself is not drawn."""
         self._ego_xy = np.array([ego.x, ego.y])
-        used = dict.fromkeys(ActorClass, 0)
-        active = []
-        for name, box in zip(classes, np.asarray(boxes, dtype=float), strict=True):
-            actor_class = ActorClass(name)
-            node = self._node(actor_class, used[actor_class])
-            used[actor_class] += 1
-            self.scene.set_pose(node, self._actor_pose(box))
-            active.append(node)
-        for actor_class, pool in self._pools.items():
-            for node in pool[used[actor_class]:]:
-                self.scene.set_pose(node, _parked())
-        self._active = active
+        self._classes = [ActorClass(name) for name in classes]
+        self._poses = np.array([self._actor_pose(box) for box in np.asarray(boxes, dtype=float)]).reshape(-1, 4, 4)
+        self._segmentation_stale = self._nodes_stale = True
         if self._road_node is not None:
             pose = np.eye(4)
             pose[:2, 3] = -self._ego_xy
             self.scene.set_pose(self._road_node, pose)
+
+    def _place_nodes(self) -> list[pyrender.Node]:
+        """Move the node pools to the frame's poses (colour renders draw the nodes; unused ones are parked);
+        returns the actors' nodes in :meth:`set_frame` order."""
+        used = dict.fromkeys(ActorClass, 0)
+        nodes = []
+        for actor_class, pose in zip(self._classes, self._poses, strict=True):
+            node = self._node(actor_class, used[actor_class])
+            used[actor_class] += 1
+            self.scene.set_pose(node, pose)
+            nodes.append(node)
+        for actor_class, pool in self._pools.items():
+            for node in pool[used[actor_class]:]:
+                self.scene.set_pose(node, _parked())
+        self._nodes_stale = False
+        return nodes
 
     def _actor_pose(self, box: np.ndarray) -> np.ndarray:
         """Node pose: the unit mesh scaled to the box, rotated by yaw, at the centre relative to the ego."""
@@ -161,16 +157,21 @@ class RigScene:
 
     def visible_pixel_counts(self, camera: Camera, rig: Rig, ego: EgoPose) -> np.ndarray:
         """``(N,)`` pixels of each actor (in :meth:`set_frame` order) visible in ``camera`` after occlusion,
-        counted in a segmentation render at the camera's resolution."""
+        counted in a segmentation render at the camera's resolution (:mod:`.segmentation`: one draw call)."""
         self._use_camera(camera, rig, ego)
-        seg_map = {node: seg_colour(slot) for node, slot in ((n, self._slot_of[n]) for n in self._active)}
-        image, _ = self.renderer.render(self.scene, flags=pyrender.RenderFlags.SEG, seg_node_map=seg_map)
-        slots = decode_segmentation(image)
-        counts = np.bincount(slots[slots >= 0].ravel(), minlength=len(self._slot_of))
-        return counts[[self._slot_of[node] for node in self._active]].astype(np.int64)
+        self.renderer._platform.make_current()  # pyrender's context (the process's one: see the docstring)
+        if self._segmentation_stale:
+            self._segmentation.set_actors(self._classes, self._poses)
+            self._segmentation_stale = False
+        projection = self._camera_node.camera.get_projection_matrix(width=camera.width, height=camera.height)
+        return self._segmentation.counts(
+            self.scene.get_pose(self._camera_node), projection, camera.width, camera.height
+        )
 
     def colour(self, camera: Camera, rig: Rig, ego: EgoPose) -> np.ndarray:
         """``(H, W, 3)`` uint8 lit colour image of ``camera`` at its resolution."""
+        if self._nodes_stale:
+            self._place_nodes()
         self._use_camera(camera, rig, ego)
         image, _ = self.renderer.render(self.scene)
         return np.ascontiguousarray(image[..., :3])
@@ -188,6 +189,14 @@ def road_mesh(markings: RoadMarkings) -> pyrender.Mesh:
     colours = np.concatenate([np.tile([90, 92, 96, 255], (4, 1)), np.tile([235, 235, 235, 255], (4 * len(quads), 1))])
     mesh = trimesh.Trimesh(vertices=vertices, faces=faces, vertex_colors=colours.astype(np.uint8), process=False)
     return pyrender.Mesh.from_trimesh(mesh, smooth=False)
+
+
+def _triangle_positions(mesh: pyrender.Mesh) -> np.ndarray:
+    """``(K, 3)`` float32 vertex positions of a one-primitive, unindexed mesh: what pyrender draws."""
+    (primitive,) = mesh.primitives
+    if primitive.indices is not None:
+        raise ValueError("expected an unindexed (smooth=False) mesh")
+    return primitive.positions
 
 
 def _parked() -> np.ndarray:

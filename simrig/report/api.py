@@ -7,12 +7,12 @@ import shutil
 from pathlib import Path
 
 from ..benchmark.api import BENCH_FILE
-from ..benchmark.results import CAUSES, RESULTS
+from ..benchmark.results import CAMERAS, CAUSES, RESULTS
 from .curves import curve_table, plot_sweep, plot_sweep_by_scenario
 from .groups import groups
 from .load import BenchResults, load_bench
 from .markdown import table
-from .summary import causes_table, scenario_table, tracker_table
+from .summary import camera_table, causes_table, scenario_table, tracker_table
 from .worst_cell import inspect_worst
 
 
@@ -23,8 +23,8 @@ def write_report(results: Path | str, *, out: Path | str | None = None) -> Path:
     bench = load_bench(results)
     out = Path(out) if out is not None else Path("reports") / bench.suite
     out.mkdir(parents=True, exist_ok=True)
-    for name in (RESULTS, CAUSES, BENCH_FILE):
-        if (bench.folder / name).resolve() != (out / name).resolve():
+    for name in (RESULTS, CAUSES, CAMERAS, BENCH_FILE):
+        if (bench.folder / name).is_file() and (bench.folder / name).resolve() != (out / name).resolve():
             shutil.copyfile(bench.folder / name, out / name)
     lines = _header(bench, out)
     lines += _results_section(bench)
@@ -61,6 +61,12 @@ def _results_section(bench: BenchResults) -> list[str]:
         lines += [f"### {group.title}", ""] + tracker_table(bench, group) + [""]
         lines += ["Per scenario: HOTA, mean over seeds (identity switches, summed over seeds).", ""]
         lines += scenario_table(bench, group) + [""]
+        per_camera = camera_table(bench, group)
+        if per_camera:
+            lines += ["Per camera: 2D HOTA, mean over scenarios and seeds (IDSW, summed; a 3D tracker's boxes "
+                      "projected into the camera). Last row: ground-truth boxes in view, and how many of them "
+                      "the evaluation region ignored, summed.", ""]
+            lines += per_camera + [""]
     return lines
 
 
@@ -79,7 +85,7 @@ def _curves_section(bench: BenchResults, out: Path) -> list[str]:
             for metric, name in group.curve_metrics[:1] + group.curve_metrics[-1:]:
                 numbers = curve_table(bench, parameter, group, metric, name)
                 if numbers:
-                    where = "" if group.key == "3d" else f" (camera {group.key})"
+                    where = {"3d": "", "2d": " (2D trackers)"}.get(group.key, f" (camera {group.key})")
                     lines += [f"{name}{where}, mean over seeds of the mean over scenarios:", ""] + numbers + [""]
         by_scenario = plot_sweep_by_scenario(bench, parameter, out / f"curves-{slug}-by-scenario.png")
         if by_scenario is not None:
@@ -90,9 +96,10 @@ def _curves_section(bench: BenchResults, out: Path) -> list[str]:
 def _causes_section(bench: BenchResults) -> list[str]:
     lines = ["## Errors by cause", "",
              "Over every cell of the suite. An error with several causes counts under each; `total` counts it "
-             "once. `none`: no cause found in the look-back window.", ""]
+             "once. `none`: no cause found in the look-back window. `ignored` (FN only): ground-truth boxes the "
+             "evaluation region ignored and nobody tracked — not errors, not in `total`.", ""]
     for group in groups(bench.results):
-        where = "3D" if group.key == "3d" else f"2D, camera {group.key}"
+        where = {"3d": "3D", "2d": "2D trackers, every camera"}.get(group.key, f"2D, camera {group.key}")
         for kind, name in (("IDS", "Identity switches"), ("FN", "Missed boxes (FN)")):
             lines += [f"{name} by cause ({where}):", ""] + causes_table(bench, group, kind) + [""]
     return lines
@@ -111,7 +118,7 @@ def _worst_section(bench: BenchResults, out: Path) -> list[str]:
              "and `simrig score` the tracks to see every error.", "",
              f"![bird's-eye view of the worst cell]({worst.bev.name})", "",
              f"Camera mosaic at frame {worst.mosaic_frame} (the first switch): solid boxes ground truth, dashed "
-             "boxes detections.", "",
+             "boxes detections, dotted boxes the tracker's (`T<id>`).", "",
              f"![camera mosaic of the worst cell]({worst.mosaic.name})", ""]
     if worst.switches:
         rows = [[str(number), str(s["frame"]), s["camera"] or "-", s["class"], str(s["actor_id"]),

@@ -66,7 +66,8 @@ def plot_sweep(bench: BenchResults, parameter: str, groups: list[Group], out: Pa
                 axis.plot(line["x"], line["mean"], marker="o", markersize=3, color=palette[tracker], label=tracker)
                 axis.fill_between(line["x"], line["low"], line["high"], color=palette[tracker], alpha=0.18,
                                   linewidth=0)
-            axis.set_title(f"{name}" + ("" if group.key == "3d" else f" (camera {group.key})"), fontsize=10)
+            where = {"3d": "", "2d": " (2D trackers)"}.get(group.key, f" (camera {group.key})")
+            axis.set_title(f"{name}{where}", fontsize=10)
             axis.set_xlabel(parameter)
             axis.grid(alpha=0.3)
         axes[row][0].legend(fontsize=7, loc="best")
@@ -95,7 +96,7 @@ def plot_sweep_by_scenario(bench: BenchResults, parameter: str, out: Path) -> Pa
         axis = axes[index // columns][index % columns]
         mine = points[points["scenario"] == scenario]
         for tracker, line in curve(mine, "2d_HOTA").groupby("tracker", sort=False):
-            dashed = (mine.loc[mine["tracker"] == tracker, "scored"] != "3d").any()
+            dashed = (~mine.loc[mine["tracker"] == tracker, "scored"].isin(("3d", "2d"))).any()
             axis.plot(line["x"], line["mean"], marker="o", markersize=2.5, color=palette[tracker],
                       linestyle="--" if dashed else "-", label=tracker)
             axis.fill_between(line["x"], line["low"], line["high"], color=palette[tracker], alpha=0.15, linewidth=0)

@@ -24,7 +24,8 @@ class Group:
 
 
 def group_of(scored: str) -> Group:
-    """The group of trackers scored as ``scored`` (``3d`` or a camera name)."""
+    """The group of trackers scored as ``scored`` (``3d``; ``2d``: 2D-only trackers over every camera; or a
+    camera name)."""
     if scored == "3d":
         return Group(
             "3d", "3D trackers, scored in 3D over every camera (HOTA, AssA, IDF1: their boxes projected into "
@@ -33,6 +34,13 @@ def group_of(scored: str) -> Group:
              ("3d_MOTA", "MOTA"), ("3d_IDS", "IDS"), ("3d_FRAG", "FRAG")),
             (("2d_HOTA", "HOTA"), ("2d_AssA", "AssA"), ("3d_AMOTA", "AMOTA"), ("3d_IDS", "IDS per sequence")),
             "3d", "3d_IDS")
+    if scored == "2d":
+        return Group(
+            "2d", "2D trackers, scored in 2D over every camera (their own per-camera boxes)",
+            (("2d_HOTA", "HOTA"), ("2d_AssA", "AssA"), ("2d_IDF1", "IDF1"), ("2d_MOTA", "MOTA"),
+             ("2d_IDSW", "IDSW"), ("2d_Frag", "Frag")),
+            (("2d_HOTA", "HOTA"), ("2d_AssA", "AssA"), ("2d_IDF1", "IDF1"), ("2d_IDSW", "IDSW per sequence")),
+            "2d", "2d_IDSW")
     return Group(
         scored, f"Trackers scored in 2D on camera {scored} only",
         (("2d_HOTA", "HOTA"), ("2d_AssA", "AssA"), ("2d_IDF1", "IDF1"), ("2d_MOTA", "MOTA"),
@@ -42,8 +50,8 @@ def group_of(scored: str) -> Group:
 
 
 def groups(results: pd.DataFrame) -> list[Group]:
-    """The groups present, 3D first."""
-    keys = sorted(set(results["scored"]), key=lambda key: (key != "3d", key))
+    """The groups present: 3D first, then 2D over every camera, then single cameras."""
+    keys = sorted(set(results["scored"]), key=lambda key: (key != "3d", key != "2d", key))
     return [group_of(key) for key in keys]
 
 

@@ -10,7 +10,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 
 from ..benchmark.api import BENCH_FILE
-from ..benchmark.results import CAUSES, RESULTS
+from ..benchmark.results import CAMERAS, CAUSES, RESULTS
 from ..benchmark.suite import TrackerEntry
 from ..errors import SimrigError
 
@@ -21,12 +21,14 @@ class ReportError(SimrigError):
 
 @dataclass(frozen=True)
 class BenchResults:
-    """``results``: one row per point × tracker; ``causes``: errors by cause; ``description``: bench.json."""
+    """``results``: one row per point × tracker; ``causes``: errors by cause; ``description``: bench.json;
+    ``cameras``: 2D metrics per point × tracker × camera (empty for a bench folder written before it existed)."""
 
     folder: Path
     results: pd.DataFrame
     causes: pd.DataFrame
     description: dict
+    cameras: pd.DataFrame | None = None
 
     @property
     def suite(self) -> str:
@@ -61,5 +63,6 @@ def load_bench(path: Path | str) -> BenchResults:
     if not description.get("complete") or not (folder / RESULTS).is_file():
         raise ReportError(f"bench in {str(folder)!r} did not finish; run '{description.get('command')}' again "
                           "to complete it")
+    cameras = pq.read_table(folder / CAMERAS).to_pandas() if (folder / CAMERAS).is_file() else None
     return BenchResults(folder, pq.read_table(folder / RESULTS).to_pandas(),
-                        pq.read_table(folder / CAUSES).to_pandas(), description)
+                        pq.read_table(folder / CAUSES).to_pandas(), description, cameras)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from ..scoring.attribution import ATTRIBUTION_CAUSES
+from ..scoring.attribution import ATTRIBUTION_CAUSES, IGNORED
 from .groups import COUNT_COLUMNS, Group
 from .load import BenchResults
 from .markdown import number, table
@@ -56,7 +56,31 @@ def causes_table(bench: BenchResults, group: Group, kind: str) -> list[str]:
     causes = causes[(causes["scored"] == group.key) & (causes["dimension"] == group.dimension)
                     & (causes["kind"] == kind)]
     trackers = list(dict.fromkeys(bench.results.loc[bench.results["scored"] == group.key, "tracker"]))
-    present = [cause for cause in (*ATTRIBUTION_CAUSES, "total") if cause in set(causes["cause"])]
+    present = [cause for cause in (*ATTRIBUTION_CAUSES, "total", IGNORED) if cause in set(causes["cause"])]
     counts = causes.groupby(["tracker", "cause"])["count"].sum()
     out = [[f"`{tracker}`"] + [int(counts.get((tracker, cause), 0)) for cause in present] for tracker in trackers]
     return table(["tracker"] + present, out)
+
+
+def camera_table(bench: BenchResults, group: Group) -> list[str]:
+    """Rows: trackers of ``group``; columns: cameras; cells: 2D HOTA (mean over the base points) and IDSW
+    (summed), ``-`` where nothing was scored (no box on either side); a last row with the ground-truth boxes in
+    view and those ignored. Empty without camera data."""
+    cameras = bench.cameras
+    if cameras is None or cameras.empty:
+        return []
+    rows = cameras[(cameras["sweep"] == "") & (cameras["scored"] == group.key)]
+    if rows.empty:
+        return []
+    names = list(dict.fromkeys(rows["camera"]))
+    out = []
+    for tracker, frame in rows.groupby("tracker", sort=False):
+        by_camera = frame.groupby("camera", sort=False)
+        hota, switches = by_camera["HOTA"].mean(), by_camera["IDSW"].sum()
+        scored = by_camera["CLR_TP"].sum() + by_camera["CLR_FN"].sum() + by_camera["CLR_FP"].sum()
+        out.append([f"`{tracker}`"] + [f"{number(hota[name])} ({number(switches[name])})"
+                                       if name in hota and scored[name] > 0 else "-" for name in names])
+    first = rows[rows["tracker"] == rows["tracker"].iloc[0]].groupby("camera", sort=False)
+    boxes, ignored = first["boxes"].sum(), first["ignored"].sum()
+    out.append(["ground truth (ignored)"] + [f"{number(boxes[name])} ({number(ignored[name])})" for name in names])
+    return table(["tracker"] + [f"`{name}`" for name in names], out)

@@ -43,8 +43,8 @@ class WorstCell:
 def choose(bench: BenchResults) -> tuple[dict, dict]:
     """(results row, tracker entry) of the worst cell for the suite's first tracker."""
     entry = bench.trackers[0]
-    group = group_of(entry.get("camera") or "3d")
     rows = bench.unique_cells(bench.results[bench.results["tracker"] == entry["name"]])
+    group = group_of(rows["scored"].iloc[0])
     rows = rows.assign(_hota=rows["2d_HOTA"].fillna(math.inf))
     ordered = rows.sort_values([group.switches, "_hota", "cell"], ascending=[False, True, True], kind="stable")
     return ordered.iloc[0].drop("_hota").to_dict(), entry
@@ -64,7 +64,7 @@ def inspect_worst(bench: BenchResults, out: Path) -> WorstCell:
     """Choose the worst cell, rerun its first tracker, and write ``worst-bev.png`` and ``worst-mosaic.png``
     into ``out``."""
     row, entry = choose(bench)
-    group = group_of(entry.get("camera") or "3d")
+    group = group_of(row["scored"])
     with tempfile.TemporaryDirectory(prefix="simrig-report-") as scratch:
         dataset = _dataset(bench, row["cell"], Path(scratch))
         run = run_tracker(dataset, entry["tracker"], Path(scratch) / "tracks", dict(entry.get("params") or {}),
@@ -85,6 +85,6 @@ def inspect_worst(bench: BenchResults, out: Path) -> WorstCell:
                  else "") + f": {entry['name']}, {len(switches)} identity switches")
         bev = plot_bev(dataset, tracks3d, numbered, title, out / "worst-bev.png")
         frame = int(switches["frame"].min()) if len(switches) else dataset.frame_count // 2
-        mosaic = render_mosaic(dataset.path, frame, out / "worst-mosaic.png")
+        mosaic = render_mosaic(dataset.path, frame, out / "worst-mosaic.png", tracks=run.out)
     listed = switches[["frame", "camera", "class", "actor_id", "previous_track_id", "track_id", "causes"]]
     return WorstCell(row, listed.to_dict("records"), bev, mosaic, frame)

@@ -1,6 +1,7 @@
 """The nuScenes tracking metrics of one class (AMOTA, AMOTP, MOTAR, MOTA, MOTP, RECALL, IDS, FRAG, MT, ML, TP,
-FP, FN) and MUTR3D's velocity errors (ATVE, TVE; Eq. 11 of "MUTR3D: A Multi-camera Tracking Framework via 3D-to-2D Queries", Zhang et al., 2022), following the devkit's algorithm on exact
-per-frame ground truth (no interpolation of either side).
+FP, FN) and MUTR3D's velocity errors (ATVE, TVE; Eq. 11 of "MUTR3D: A Multi-camera Tracking Framework via
+3D-to-2D Queries", Zhang et al., 2022), following the devkit's algorithm on exact per-frame ground truth (no
+interpolation of either side).
 
 1. Match with every tracker box kept; the track scores of the MATCH events, sorted, give the recall reached
    at each score. 40 recall levels ``linspace(0.1, 1, 40)``: a level's score threshold is interpolated from
@@ -9,7 +10,9 @@ per-frame ground truth (no interpolation of either side).
    (:mod:`simrig.scoring.clear3d`).
 3. MOTAR_r = max(0, 1 − (IDS + FP + FN − (1 − r)·P) / (r·P)) with P the ground-truth boxes and r = TP/P the
    measured recall (TP counts MATCH events, not switches, as the devkit does; algebraically this is
-   max(0, 1 − FP/TP)). AMOTA = mean of MOTAR_r over the 40 levels (0 where unreached); AMOTP = mean of
+   max(0, 1 − FP/TP)). A class with ground truth that reaches no level gets the devkit's worst values
+   (``metric_worst``: MOTAR 0, MOTA 0, MOTP 2 m, RECALL 0), so it lowers the overall mean.
+   AMOTA = mean of MOTAR_r over the 40 levels (0 where unreached); AMOTP = mean of
    MOTP_r [m] (2 m where unreached). ATVE = mean over the reached levels of the mean velocity error [m/s] of
    matched pairs (no worst value is defined for it; NaN when no level is reached).
 4. MOTA (clipped at 0), MOTP, RECALL (matches incl. switches / P), IDS, FRAG, MT, ML, TP, FP, FN and TVE are
@@ -24,6 +27,7 @@ import numpy as np
 
 from .bev import BevSequence
 from .clear3d import Accumulation, ClearCounts3D, accumulate, clear_counts
+from .results import COUNT_METRICS
 
 RECALL_LEVELS = np.linspace(0.1, 1.0, 40).round(12)
 """The 40 recall levels r of AMOTA (the devkit's ``min_recall`` 0.1 to 1)."""
@@ -116,7 +120,9 @@ def amota_family(seq: BevSequence) -> AmotaResult:
     metrics["ATVE"] = float(np.mean(velocity)) if velocity else float("nan")
     if not reached:
         gt_tracks = int(len(np.unique(seq.gt_id)))
-        metrics.update(MOTA=0.0, MOTP=WORST_MOTP_M, RECALL=0.0, TP=0, MT=0, ML=gt_tracks, FN=seq.num_gt_dets)
+        # The devkit's metric_worst for a class with ground truth that reaches no recall level.
+        metrics.update(MOTAR=0.0, MOTA=0.0, MOTP=WORST_MOTP_M, RECALL=0.0, TP=0, MT=0, ML=gt_tracks,
+                       FN=seq.num_gt_dets)
         return AmotaResult(metrics, tuple(levels), None, float("nan"))
     # Levels run from the lowest recall up; the devkit lists them from the highest down and takes the first
     # maximum, so ties go to the highest recall.
@@ -126,3 +132,26 @@ def amota_family(seq: BevSequence) -> AmotaResult:
                     ("MOTAR", "MOTA", "MOTP", "RECALL", "TVE", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN")})
     best_threshold = reached[best].threshold
     return AmotaResult(metrics, tuple(levels), cache[best_threshold][0], best_threshold)
+
+
+def combine_classes(per_class: dict[str, dict[str, float]], names: tuple[str, ...] | None = None
+                    ) -> dict[str, float]:
+    """Overall 3D metrics from per-class ones, the devkit's rule by name: counts summed over the classes (0 when
+    nothing was scored), every other metric the mean over the classes where it is defined (NaN when none is:
+    no class has ground truth). A class with ground truth and no reached recall level has MOTAR 0, so it counts.
+    ``names``: the metrics to combine (default: those of the classes).
+
+    >>> combine_classes({"car": {"MOTAR": 1.0, "IDS": 2}, "truck": {"MOTAR": 0.0, "IDS": 1}})
+    {'MOTAR': 0.5, 'IDS': 3.0}
+    """
+    if names is None:
+        names = tuple(dict.fromkeys(name for values in per_class.values() for name in values))
+    overall = {}
+    for name in names:
+        values = np.array([values[name] for values in per_class.values()], dtype=float).reshape(-1)
+        present = values[~np.isnan(values)]
+        if name in COUNT_METRICS:
+            overall[name] = float(present.sum())
+        else:
+            overall[name] = float(present.mean()) if len(present) else float("nan")
+    return overall

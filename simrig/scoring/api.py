@@ -7,43 +7,61 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from simrig.dataset.tracks_file import TrackSet, read_tracks
-from simrig.scoring.results import COUNT_METRICS, METRICS_2D, METRICS_3D, ScoreReport
+from simrig.dataset.tracks_file import TrackSet
+from simrig.dataset.tracks_formats import read_tracks_as
+from simrig.dataset.tracks_nuscenes import sample_token
+from simrig.scenarios.evaluation_schema import EvaluationConfig
+from simrig.scoring.results import METRICS_2D, METRICS_3D, ScoreReport
 
 from ..dataset import Dataset
+from ..dataset.evaluation import evaluation_of, ignore_rules, ignored_counts
+from ..dataset.ground_truth import GroundTruth, project_tracks
 from ..errors import TracksError
-from .amota import amota_family
+from .amota import amota_family, combine_classes
 from .attribution import ERRORS_SCHEMA, Attributor
 from .bev import BevSequence
 from .clear import CLEAR, ClearEvents
 from .clear3d import Accumulation, fragmentations
-from .counts import sum_counts
-from .ground_truth import GroundTruth, load_ground_truth
+from .counts import combine
 from .hota import HOTA
 from .identity import Identity
-from .inputs import camera_sequences, class_sequences, project_tracks
-from .ratios import clear_ratios, hota_ratios, identity_ratios
+from .inputs import camera_sequences, class_sequences
 
 LOOKBACK_S = 1.0
 """[s] an identity switch is also tagged with the causes of this long before it (see attribution)."""
+_CLEAR = CLEAR()
+UNITS_2D = (HOTA(), _CLEAR, Identity())
+"""The 2D metric units; their values are combined by name (:func:`~simrig.scoring.counts.combine`)."""
 
 
 def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookback_s: float = LOOKBACK_S,
-          camera: str | None = None) -> ScoreReport:
+          camera: str | None = None, truth: GroundTruth | None = None,
+          evaluation: EvaluationConfig | dict | None = None, fmt: str | None = None) -> ScoreReport:
     """Score ``tracks`` (a tracks folder or file, or a read :class:`TrackSet`) against ``dataset``.
+
+    ``fmt``: the tracks' format — ``simrig``, ``motchallenge``, ``kitti`` or ``nuscenes``
+    (:mod:`simrig.dataset.tracks_formats`); detected from the path when ``None``.
 
     With ``camera``, only that camera is scored, in 2D (a 2D tracker's own boxes there, or a 3D tracker's
     projected into it) against the actors in its view, and the 3D metrics are left out: how a per-camera
     tracker and one that uses the other cameras compare on one camera's ground truth.
+
+    ``truth``: the dataset's ground truth when the caller already holds it (scoring several trackers on one
+    dataset reads it once; by default it is read once per :class:`Dataset` object). ``evaluation``: which 2D
+    ground truth is ignored — an :class:`EvaluationConfig`, or a dict of keys put on top of the dataset
+    scenario's ``[evaluation]`` table (:mod:`simrig.scenarios.evaluation_schema`).
     """
     if not isinstance(dataset, Dataset):
         dataset = Dataset.open(dataset)
     if camera is not None and camera not in dataset.rig.camera_names:
         raise TracksError(f"--camera {camera!r}: the dataset's rig {dataset.rig.name!r} has cameras "
                           f"{', '.join(dataset.rig.camera_names)}")
-    truth = load_ground_truth(dataset)
+    config = evaluation_of(dataset.scenario, evaluation)
+    truth = dataset.ground_truth if truth is None else truth
     if not isinstance(tracks, TrackSet):
-        tracks = read_tracks(tracks, frame_count=len(truth.frames), cameras=truth.rig.camera_names)
+        tokens = {sample_token(dataset.scenario["name"], dataset.seed, f): int(f) for f in truth.frames}
+        tracks = read_tracks_as(tracks, fmt, frame_count=len(truth.frames), cameras=truth.rig.camera_names,
+                                tokens=tokens, classes=config.classes)
     lookback = int(round(lookback_s * float(dataset.scenario["frame_rate_hz"])))
     errors = []
     metrics3d = None
@@ -56,14 +74,15 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
         rows2d, source = project_tracks(truth, tracks.tracks3d), "projected 3D tracks"
     else:
         rows2d, source = tracks.tracks2d, "tracks2d"
-    metrics2d, errors2d = _score_2d(truth, rows2d, lookback, camera)
+    metrics2d, errors2d = _score_2d(truth, rows2d, lookback, camera, config)
     metrics2d["source"] = source
     errors.append(errors2d)
     return ScoreReport(
         dataset=str(dataset.path), tracks=tracks.source, scenario=dataset.scenario["name"], seed=dataset.seed,
         metrics3d=metrics3d, metrics2d=metrics2d,
         errors=pa.concat_tables(errors) if errors else ERRORS_SCHEMA.empty_table(),
-        settings={"lookback_s": lookback_s, **({"camera": camera} if camera is not None else {})},
+        settings={"lookback_s": lookback_s, **({"camera": camera} if camera is not None else {}),
+                  "evaluation": config.model_dump(mode="json")},
     )
 
 
@@ -75,12 +94,7 @@ def _score_3d(truth: GroundTruth, tracks: TrackSet, lookback: int) -> tuple[dict
         per_class[seq.label] = {name: result.metrics[name] for name in METRICS_3D}
         if result.best is not None or seq.num_gt_dets:
             errors.append(attributor.tag(seq.label, "", "3d", events_3d(seq, result.best)))
-    overall = {}
-    for name in METRICS_3D:
-        values = np.array([values[name] for values in per_class.values()], dtype=float)
-        present = values[~np.isnan(values)]
-        overall[name] = float("nan") if len(present) == 0 else (
-            float(present.sum()) if name in COUNT_METRICS else float(present.mean()))
+    overall = combine_classes(per_class, METRICS_3D)
     return {"overall": overall, "per_class": per_class}, _concat(errors)
 
 
@@ -109,30 +123,47 @@ def events_3d(seq: BevSequence, best: Accumulation | None) -> ClearEvents:
     )
 
 
-def _score_2d(truth: GroundTruth, rows2d, lookback: int, camera: str | None = None) -> tuple[dict, pa.Table]:
-    units = (HOTA(), CLEAR(), Identity())
-    counts, errors = [], []
+def _score_2d(truth: GroundTruth, rows2d, lookback: int, camera: str | None,
+              config: EvaluationConfig) -> tuple[dict, pa.Table]:
+    parts, errors = [], []
     miss = truth.miss_causes
     cameras = truth.rig.camera_names
     scored = cameras if camera is None else (camera,)
-    for seq in camera_sequences(truth, rows2d, scored):
-        clear_counts, events = units[1].count_with_events(seq)
-        counts.append((seq.camera, seq.label, {**units[0].count(seq), **clear_counts, **units[2].count(seq)}))
-        attributor = Attributor(truth, miss[:, cameras.index(seq.camera)], lookback)
+    rules = ignore_rules(truth, config)
+    for seq in camera_sequences(truth, rows2d, scored, ignored=rules if rules.any() else None,
+                                classes=config.classes):
+        counts = {}
+        for unit in UNITS_2D:
+            if unit is _CLEAR:  # the same pass also gives the events behind its errors
+                counts[unit.name], events = _CLEAR.count_with_events(seq)
+            else:
+                counts[unit.name] = unit.count(seq)
+        parts.append((seq.camera, seq.label, counts))
+        c = cameras.index(seq.camera)
+        attributor = Attributor(truth, miss[:, c], lookback)
         errors.append(attributor.tag(seq.label, seq.camera, "2d", events))
+        if len(seq.ignored_misses):
+            errors.append(attributor.tag_ignored(seq.label, seq.camera, seq.ignored_misses, rules[:, c]))
 
     def metrics(selected: list[dict]) -> dict:
-        if not selected:
-            return dict.fromkeys(METRICS_2D, float("nan"))
-        total = sum_counts(selected)
-        values = {**hota_ratios(total), **clear_ratios(total), **identity_ratios(total)}
+        values = combine(UNITS_2D, selected)
         return {name: values[name] for name in METRICS_2D}
 
+    columns = [cameras.index(name) for name in scored]
+    in_view, scored_rules = truth.in_view[:, columns], rules[:, columns]
+    delivered = in_view & truth.detected[:, columns] & (scored_rules == 0)
+
+    def accounting(i: slice | int) -> dict:
+        return {"boxes": int(in_view[:, i].sum()), **ignored_counts(scored_rules[:, i]),
+                "delivered": int(delivered[:, i].sum())}
+
     return {
-        "overall": metrics([c for _, _, c in counts]),
-        "per_camera": {name: metrics([c for cam, _, c in counts if cam == name]) for name in scored},
-        "per_class": {label: metrics([c for _, lab, c in counts if lab == label])
-                      for label in sorted({lab for _, lab, _ in counts})},
+        "overall": metrics([p for _, _, p in parts]),
+        "per_camera": {name: metrics([p for cam, _, p in parts if cam == name]) for name in scored},
+        "per_class": {label: metrics([p for _, lab, p in parts if lab == label])
+                      for label in sorted({lab for _, lab, _ in parts})},
+        "ground_truth": {"overall": accounting(slice(None)),
+                         "per_camera": {name: accounting(i) for i, name in enumerate(scored)}},
     }, _concat(errors)
 
 

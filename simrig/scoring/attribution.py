@@ -22,9 +22,14 @@ import numpy as np
 import pyarrow as pa
 
 from ..causes import CAUSE_NAMES, Cause
+from ..dataset.evaluation import rule_names
+from ..dataset.ground_truth import GroundTruth
 from .clear import ClearEvents
-from .ground_truth import GroundTruth
 
+IGNORED = "ignored"
+IGNORED_KIND = "IGN"
+"""Kind of an errors row for an ignored box left untracked: not an error, listed so a user sees what was not
+scored and why."""
 HANDOVER = "handover"
 NONE = "none"
 ATTRIBUTION_CAUSES = (*[name for name in CAUSE_NAMES if name != "clutter"], HANDOVER, NONE)
@@ -36,7 +41,8 @@ ERRORS_SCHEMA = pa.schema([
     pa.field("track_id", pa.int64()), pa.field("previous_track_id", pa.int64()),
     pa.field("causes", pa.list_(pa.string())),
 ])
-"""One row per error: ``dimension`` 3d or 2d; ``kind`` FN, IDS or FRAG; ``camera`` empty in 3D; track ids −1
+"""One row per error: ``dimension`` 3d or 2d; ``kind`` FN, IDS or FRAG (or IGN: an ignored box left
+untracked); ``camera`` empty in 3D; track ids −1
 where they do not apply (an FN has none; FRAG gives the track that resumed)."""
 
 
@@ -76,6 +82,23 @@ class Attributor:
             "causes": [cause_names(int(mask)) for mask in masks],
         }, schema=ERRORS_SCHEMA)
 
+    def tag_ignored(self, label: str, camera: str, misses: np.ndarray, rules: np.ndarray) -> pa.Table:
+        """Rows of kind ``IGN`` for ignored ground truth no tracker box was matched to (not scored, so no FN):
+        ``misses`` ``(n, 2)`` (frame, actor id); causes: the rules that ignored it (``ignored_range``, …) and
+        why the detector did not deliver it. ``rules``: ``(R,)`` :class:`~simrig.dataset.evaluation.IgnoreRule`
+        bits of this camera."""
+        rows = self.truth.rows_of(misses[:, 0], misses[:, 1])
+        n = len(rows)
+        causes = [[f"{IGNORED}_{name}" for name in rule_names(int(rule))]
+                  + ([] if mask == 0 else cause_names(int(mask)))
+                  for rule, mask in zip(rules[rows], self.masks[rows], strict=True)]
+        return pa.table({
+            "dimension": ["2d"] * n, "kind": [IGNORED_KIND] * n, "frame": misses[:, 0].astype(np.int32),
+            "camera": [camera] * n, "class": [label] * n, "actor_id": misses[:, 1].astype(np.int64),
+            "track_id": np.full(n, -1, dtype=np.int64), "previous_track_id": np.full(n, -1, dtype=np.int64),
+            "causes": causes,
+        }, schema=ERRORS_SCHEMA)
+
     def _window(self, actor: int, first: int, last: int, *, handover_from: int, handover_to: int | None = None
                 ) -> int:
         """Union of the actor's masks over frames [first, last], plus the handover bit if the set of cameras
@@ -110,18 +133,25 @@ def cause_names(mask: int) -> list[str]:
 
 def errors_by_cause(errors: pa.Table) -> dict[str, dict[str, dict[str, int]]]:
     """Per dimension, per tag: how many FN, IDS and FRAG carry it (an error with two tags counts under both),
-    and ``total`` (each error once)."""
+    and ``total`` (each error once); last, ``ignored``: under FN, the ignored boxes left untracked (not
+    errors, not in ``total``)."""
     out: dict[str, dict[str, dict[str, int]]] = {}
     dims = errors.column("dimension").to_pylist()
     kinds = errors.column("kind").to_pylist()
     causes = errors.column("causes").to_pylist()
     for dimension in sorted(set(dims)):
         table = {cause: dict.fromkeys(("FN", "IDS", "FRAG"), 0) for cause in (*ATTRIBUTION_CAUSES, "total")}
+        ignored = 0
         for dim, kind, tags in zip(dims, kinds, causes, strict=True):
             if dim != dimension:
+                continue
+            if kind == IGNORED_KIND:
+                ignored += 1
                 continue
             table["total"][kind] += 1
             for tag in tags:
                 table[tag][kind] += 1
         out[dimension] = {cause: row for cause, row in table.items() if any(row.values()) or cause == "total"}
+        if ignored:
+            out[dimension][IGNORED] = {"FN": ignored, "IDS": 0, "FRAG": 0}
     return out

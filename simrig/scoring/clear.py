@@ -16,6 +16,7 @@ import numpy as np
 
 from .assignment import contested, positive_matching
 from .counts import Counts
+from .ratios import clear_ratios
 from .sequence import Sequence
 
 _EPS = np.finfo(float).eps
@@ -40,8 +41,17 @@ class ClearEvents:
 class CLEAR:
     """CLEAR MOT counts (TP, FN, FP, IDSW, Frag, MT/PT/ML and the IoU sum behind MOTP)."""
 
+    name = "clear"
     fields = ("CLR_TP", "CLR_FN", "CLR_FP", "IDSW", "Frag", "MT", "PT", "ML", "MOTP_sum", "CLR_Frames")
     outputs = ("MOTA", "MOTP", "MODA", "CLR_Re", "CLR_Pr", "IDSW", "Frag", "MT", "PT", "ML")
+
+    def empty(self) -> Counts:
+        """The counts of a sequence with nothing in it."""
+        return dict.fromkeys(self.fields, 0.0)
+
+    def ratios(self, counts: Counts) -> dict[str, float]:
+        """Every value of the unit from (summed) counts: :func:`simrig.scoring.ratios.clear_ratios`."""
+        return clear_ratios(counts)
 
     def count(self, seq: Sequence) -> Counts:
         """CLEAR counts of one sequence."""

@@ -11,6 +11,7 @@ import numpy as np
 
 from .assignment import contested, positive_matching
 from .counts import Counts
+from .ratios import hota_ratios
 from .sequence import Sequence
 
 ALPHAS = np.arange(0.05, 0.99, 0.05)
@@ -21,8 +22,17 @@ _EPS = np.finfo(float).eps
 class HOTA:
     """HOTA, DetA, AssA, LocA and their recall/precision parts; counts are ``(19,)`` arrays over α."""
 
+    name = "hota"
     fields = ("HOTA_TP", "HOTA_FN", "HOTA_FP", "AssA_sum", "AssRe_sum", "AssPr_sum", "LocA_sum")
     outputs = ("HOTA", "DetA", "AssA", "LocA", "DetRe", "DetPr", "AssRe", "AssPr")
+
+    def empty(self) -> Counts:
+        """The counts of a sequence with nothing in it."""
+        return {name: np.zeros(len(ALPHAS)) for name in self.fields}
+
+    def ratios(self, counts: Counts) -> dict[str, float]:
+        """Every value of the unit from (summed) counts: :func:`simrig.scoring.ratios.hota_ratios`."""
+        return hota_ratios(counts)
 
     def count(self, seq: Sequence) -> Counts:
         """HOTA counts of one sequence."""

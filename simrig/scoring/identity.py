@@ -12,14 +12,24 @@ from scipy.optimize import linear_sum_assignment
 
 from .clear import IOU_THRESHOLD
 from .counts import Counts
+from .ratios import identity_ratios
 from .sequence import Sequence
 
 
 class Identity:
     """IDTP, IDFN, IDFP."""
 
+    name = "identity"
     fields = ("IDTP", "IDFN", "IDFP")
     outputs = ("IDF1", "IDP", "IDR")
+
+    def empty(self) -> Counts:
+        """The counts of a sequence with nothing in it."""
+        return dict.fromkeys(self.fields, 0.0)
+
+    def ratios(self, counts: Counts) -> dict[str, float]:
+        """Every value of the unit from (summed) counts: :func:`simrig.scoring.ratios.identity_ratios`."""
+        return identity_ratios(counts)
 
     def count(self, seq: Sequence) -> Counts:
         """Identity counts of one sequence."""

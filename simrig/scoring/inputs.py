@@ -1,9 +1,11 @@
 """From a dataset's ground truth and a tracker's rows to the sequences the metrics read.
 
-2D: one :class:`~simrig.scoring.sequence.Sequence` per (camera, class). Ground truth: every actor in the
-camera's view (its clipped silhouette box). Tracker boxes: the tracker's own 2D rows, or — for a 3D-only
-tracker — its 3D boxes projected through the rig with the ground truth's geometry (boxes clipped to the near
-plane and the image, kept where in view), so that 3D and 2D trackers are compared on the same camera.
+2D: one :class:`~simrig.scoring.sequence.Sequence` per (camera, class), or per camera class-agnostic. Ground
+truth: every actor in the camera's view (its clipped silhouette box) that the evaluation region does not ignore
+(:mod:`simrig.dataset.evaluation`). Tracker boxes: the tracker's own 2D rows, or — for a 3D-only tracker — its
+3D boxes projected through the rig with the ground truth's geometry
+(:func:`simrig.dataset.ground_truth.project_tracks`), so that 3D and 2D trackers are compared on the same
+camera; those matched to an ignored box are removed (TrackEval's preprocessing).
 
 3D: one :class:`~simrig.scoring.bev.BevSequence` per class. Ground truth and tracker boxes count only closer to
 the ego than the class range (strict, BEV): :data:`CLASS_RANGE_M`. A track's score is the mean of its
@@ -12,83 +14,64 @@ per-frame scores over its boxes in range (nuScenes).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from simrig.dataset.tracks_file import TrackRows
+from simrig.scenarios.evaluation_schema import NUSCENES_CLASS_RANGE_M
 
-from ..geometry import project_boxes
+from ..dataset.ground_truth import GroundTruth
 from ..types import ActorClass
 from .bev import BevSequence, bev_sequence
-from .ground_truth import GroundTruth
+from .distractors import split_distractors
 from .sequence import Sequence, sequence_from_rows
 
-CLASS_RANGE_M = {ActorClass.CAR: 50.0, ActorClass.TRUCK: 50.0, ActorClass.BUS: 50.0, ActorClass.MOTORCYCLE: 40.0}
+CLASS_RANGE_M = {ActorClass(name): value for name, value in NUSCENES_CLASS_RANGE_M.items()}
 """[m] nuScenes' evaluation range per class (car, truck, bus 50 m; motorcycle 40 m), BEV distance from the ego."""
+ANY_CLASS = "any"
+"""The label of a class-agnostic sequence (``classes = "any"``)."""
 
 
-def project_tracks(truth: GroundTruth, tracks3d: TrackRows) -> TrackRows:
-    """2D rows of 3D tracks: each box projected into every camera at its frame's ego pose, kept where in view."""
-    frame, camera, index, boxes = [], [], [], []
-    names = np.array(truth.rig.camera_names, dtype=object)
-    starts = np.searchsorted(tracks3d.frame, truth.frames)
-    stops = np.searchsorted(tracks3d.frame, truth.frames, side="right")
-    for position, (lo, hi) in enumerate(zip(starts, stops, strict=True)):
-        if hi == lo:
-            continue
-        projection = project_boxes(tracks3d.boxes[lo:hi], truth.rig, truth.egos[position])
-        cam, box = np.nonzero(projection.in_view)
-        order = np.lexsort((cam, box))  # by track row, then camera: stays sorted by frame
-        cam, box = cam[order], box[order]
-        frame.append(np.full(len(box), truth.frames[position]))
-        camera.append(names[cam])
-        index.append(lo + box)
-        boxes.append(projection.boxes[cam, box])
-    if not index:
-        return TrackRows(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, object), np.zeros(0),
-                         np.zeros((0, 4)), np.zeros(0, object))
-    index = np.concatenate(index)
-    return TrackRows(
-        frame=np.concatenate(frame),
-        track_id=tracks3d.track_id[index],
-        label=tracks3d.label[index],
-        score=tracks3d.score[index],
-        boxes=np.concatenate(boxes),
-        camera=np.concatenate(camera),
-    )
-
-
-def camera_sequences(truth: GroundTruth, tracks2d: TrackRows, cameras: tuple[str, ...] | None = None
-                     ) -> list[Sequence]:
+def camera_sequences(truth: GroundTruth, tracks2d: TrackRows, cameras: tuple[str, ...] | None = None, *,
+                     ignored: np.ndarray | None = None, classes: str = "each") -> list[Sequence]:
     """One sequence per (camera, class) for every camera of the rig (or of ``cameras``) and every class present
-    on either side."""
+    on either side; with ``classes="any"`` one per camera, every class together (label ``any``).
+
+    ``ignored``: ``(R, C)`` truthy where a ground-truth box is ignored; such boxes are removed together with the
+    tracker boxes matched to them, as TrackEval's preprocessing does (:mod:`simrig.scoring.distractors`)."""
     sequences = []
     for c, camera in enumerate(truth.rig.camera_names):
         if cameras is not None and camera not in cameras:
             continue
         gt_rows = np.nonzero(truth.in_view[:, c])[0]
         track_rows = np.nonzero(tracks2d.camera == camera)[0]
-        labels = sorted(set(truth.label[gt_rows].tolist()) | set(tracks2d.label[track_rows].tolist()))
-        for label in labels:
-            g = gt_rows[truth.label[gt_rows] == label]
-            t = track_rows[tracks2d.label[track_rows] == label]
-            sequences.append(sequence_from_rows(
-                camera, label, truth.frames,
-                truth.frame[g], truth.actor_id[g], truth.boxes2d[g, c],
-                tracks2d.frame[t], tracks2d.track_id[t], tracks2d.boxes[t],
-            ))
+        if classes == ANY_CLASS:
+            groups = [(ANY_CLASS, gt_rows, track_rows)] if len(gt_rows) or len(track_rows) else []
+        else:
+            labels = sorted(set(truth.label[gt_rows].tolist()) | set(tracks2d.label[track_rows].tolist()))
+            groups = [(label, gt_rows[truth.label[gt_rows] == label], track_rows[tracks2d.label[track_rows] == label])
+                      for label in labels]
+        for label, g, t in groups:
+            seq = _sequence(truth, tracks2d, camera, c, label, g, t)
+            if ignored is not None and np.any(ignored[g, c]):
+                keep_g, keep_t, untracked = split_distractors(seq, np.asarray(ignored[g, c], dtype=bool))
+                seq = replace(_sequence(truth, tracks2d, camera, c, label, g[keep_g], t[keep_t]),
+                              ignored_misses=np.column_stack([truth.frame[g[untracked]],
+                                                              truth.actor_id[g[untracked]]]).astype(np.int64))
+            sequences.append(seq)
     return sequences
 
 
-def _ego_distance(truth: GroundTruth, frame: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """BEV distance [m] of world points ``(n, 2)`` at frame numbers ``(n,)`` from the ego at that frame."""
-    position = np.searchsorted(truth.frames, frame)
-    ego_xy = np.array([(ego.x, ego.y) for ego in truth.egos]).reshape(-1, 2)[position]
-    return np.hypot(xy[:, 0] - ego_xy[:, 0], xy[:, 1] - ego_xy[:, 1])
+def _sequence(truth: GroundTruth, tracks2d: TrackRows, camera: str, c: int, label: str, g: np.ndarray,
+              t: np.ndarray) -> Sequence:
+    return sequence_from_rows(camera, label, truth.frames, truth.frame[g], truth.actor_id[g], truth.boxes2d[g, c],
+                              tracks2d.frame[t], tracks2d.track_id[t], tracks2d.boxes[t])
 
 
 def _in_range(truth: GroundTruth, frame: np.ndarray, label: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     limit = np.array([CLASS_RANGE_M[ActorClass(name)] for name in label]) if len(label) else np.zeros(0)
-    return _ego_distance(truth, frame, boxes[:, :2]) < limit
+    return truth.distance_from_ego(frame, boxes[:, :2]) < limit
 
 
 def class_sequences(truth: GroundTruth, tracks3d: TrackRows) -> list[BevSequence]:

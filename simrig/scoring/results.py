@@ -11,7 +11,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from simrig.scoring.attribution import errors_by_cause
+from simrig.scoring.attribution import IGNORED, errors_by_cause
 
 METRICS_3D = ("AMOTA", "AMOTP", "MOTAR", "MOTA", "MOTP", "RECALL", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN",
               "ATVE", "TVE")
@@ -19,6 +19,9 @@ METRICS_3D = ("AMOTA", "AMOTP", "MOTAR", "MOTA", "MOTP", "RECALL", "IDS", "FRAG"
 METRICS_2D = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDSW", "Frag", "MT", "PT", "ML", "IDF1", "IDP",
               "IDR", "CLR_TP", "CLR_FN", "CLR_FP")
 """2D metrics, TrackEval style (MOTP: mean IoU of matches)."""
+IGNORED_COLUMNS = ("boxes", "ignored", "range", "height", "visibility", "truncation", "delivered")
+"""Per camera: ground-truth boxes in view, how many are ignored, and by each rule (a box may break several);
+``delivered``: the scored (not ignored) boxes the camera's detector reported."""
 COUNT_METRICS = {"IDS", "FRAG", "MT", "ML", "TP", "FP", "FN", "IDSW", "Frag", "PT", "CLR_TP", "CLR_FN", "CLR_FP"}
 
 
@@ -27,7 +30,9 @@ class ScoreReport:
     """Scores of one tracker output on one dataset.
 
     metrics3d: ``{"overall": {...}, "per_class": {class: {...}}}`` or ``None`` (no 3D tracks).
-    metrics2d: ``{"overall": ..., "per_class": ..., "per_camera": ...}`` and ``source`` (``tracks2d`` or
+    metrics2d: ``{"overall": ..., "per_class": ..., "per_camera": ...}``, ``ground_truth`` (``overall`` and
+    ``per_camera``: boxes in view, ignored, ignored by each rule, and ``delivered``: scored boxes the detector
+    reported) and ``source`` (``tracks2d`` or
     ``projected 3D tracks``). errors: one row per error (:data:`~simrig.scoring.attribution.ERRORS_SCHEMA`).
     """
 
@@ -65,18 +70,40 @@ class ScoreReport:
         rows = {"overall": self.metrics2d["overall"], **self.metrics2d["per_camera"],
                 **{f"class {name}": value for name, value in self.metrics2d["per_class"].items()}}
         lines += _grid(METRICS_2D, rows)
+        truth = self.metrics2d.get("ground_truth")
+        if truth is not None:
+            lines += ["", "2D ground truth: boxes in view; ignored, and by which rule (not scored: "
+                      f"{_evaluation_text(self.settings.get('evaluation'))}); delivered: scored boxes the "
+                      "detector reported"]
+            lines += _grid(IGNORED_COLUMNS, {"overall": truth["overall"], **truth["per_camera"]})
         for dimension, table in errors_by_cause(self.errors).items():
             lines += ["", f"{dimension.upper()} errors by cause (an error with several causes counts in each)"]
             lines.append(f"  {'cause':<22}{'FN':>8}{'IDS':>8}{'FRAG':>8}")
             for cause, counts in table.items():
+                if cause == IGNORED:
+                    lines.append(f"  {'ignored (not errors)':<22}{counts['FN']:>8}{'-':>8}{'-':>8}")
+                    continue
                 lines.append(f"  {cause:<22}{counts['FN']:>8}{counts['IDS']:>8}{counts['FRAG']:>8}")
         return "\n".join(lines)
+
+
+def _evaluation_text(config: dict | None) -> str:
+    """The evaluation settings in a few words."""
+    if not config:
+        return "settings not recorded"
+    if not config["ignore"]:
+        return "nothing, ignore = false"
+    ranges = config["range_m"]
+    range_text = (f"{ranges:g} m" if not isinstance(ranges, dict)
+                  else ", ".join(f"{name} {value:g} m" for name, value in ranges.items()))
+    return (f"range {range_text}; height < {config['min_height_px']:g} px; visible fraction ≤ "
+            f"{config['min_visible_fraction']:g}; truncation > {config['max_truncation']:g}")
 
 
 def _format(name: str, value) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "-"
-    if name in COUNT_METRICS:
+    if name in COUNT_METRICS or name in IGNORED_COLUMNS:
         return str(int(value))
     return f"{value:.3f}"
 

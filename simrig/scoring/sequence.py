@@ -8,7 +8,7 @@ IoU are stored (every metric ignores the others), sorted by frame.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -67,6 +67,7 @@ class Sequence(FramePairs):
     id of each ground-truth box; tracker_frame, tracker_id: ``(m,)`` the same for tracker boxes.
     pair_gt, pair_tracker: ``(p,)`` row indices of every overlapping pair in the same frame; pair_similarity:
     ``(p,)`` their IoU (> 0). gt_labels: ``(G,)`` actor ids; tracker_labels: ``(K,)`` track ids.
+    Ground truth ignored by the evaluation region is not in it (:mod:`simrig.scoring.distractors`).
     """
 
     camera: str
@@ -81,6 +82,9 @@ class Sequence(FramePairs):
     pair_similarity: np.ndarray
     gt_labels: np.ndarray
     tracker_labels: np.ndarray
+    ignored_misses: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
+    """``(n, 2)`` (frame number, actor id) of the ignored ground truth no tracker box was matched to (not
+    scored; kept so that a report can say what was not scored and why)."""
 
     @property
     def name(self) -> str:

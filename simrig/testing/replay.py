@@ -113,12 +113,10 @@ class ReplayResult:
 
     @property
     def reproduced(self) -> bool:
-        """Every recorded metric came out the same (vacuously true when the file recorded none)."""
-        return not self.differences
+        """Every recorded metric came out the same (:func:`replay` refuses a file that recorded none)."""
+        return bool(self.recorded) and not self.differences
 
     def summary(self) -> str:
-        if not self.recorded:
-            return "the replay file recorded no scores to compare with"
         if self.reproduced:
             count = sum(len(v) for v in self.recorded.values())
             return f"reproduced: all {count} recorded metrics are the same as in the failing run"
@@ -142,6 +140,9 @@ def replay(path: Path | str, *, tracker: str | None = None, params: dict | None 
     from ..scoring import score
 
     loaded = load_replay(path)
+    if not any(loaded.scores.values()):
+        raise ReplayError(f"replay file {str(path)!r} records no scores ([scores] is empty), so a rerun cannot be "
+                          "checked against anything")
     name = tracker or loaded.tracker
     if not name:
         raise ReplayError(f"replay file {str(path)!r} names no tracker (it was an object without an importable "

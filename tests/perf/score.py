@@ -42,13 +42,13 @@ from peer_scorers import motmetrics_module  # noqa: E402  (tests/ helpers)
 from simrig.scenarios import load_scenario  # noqa: E402
 
 from simrig.dataset import Dataset  # noqa: E402
+from simrig.dataset.ground_truth import load_ground_truth  # noqa: E402
 from simrig.dataset.tracks_file import TrackRows  # noqa: E402
 from simrig.pipeline.generate import generate  # noqa: E402
 from simrig.scoring.amota import amota_family  # noqa: E402
 from simrig.scoring.bev import bev_sequence  # noqa: E402
 from simrig.scoring.clear import CLEAR  # noqa: E402
 from simrig.scoring.counts import sum_counts  # noqa: E402
-from simrig.scoring.ground_truth import load_ground_truth  # noqa: E402
 from simrig.scoring.hota import HOTA  # noqa: E402
 from simrig.scoring.identity import Identity  # noqa: E402
 from simrig.scoring.inputs import camera_sequences  # noqa: E402

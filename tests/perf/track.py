@@ -11,6 +11,7 @@ Run explicitly (not part of the test suite)::
    ``hungarian`` beside a bare ``scipy.optimize.linear_sum_assignment``. The cost matrix itself is timed
    separately.
 2. End to end: every reference tracker that runs on any rig (:data:`RIG_TRACKERS`; 2D ones on every camera),
+   with its default parameters (``saga``: one detection per camera per track),
    ``step()`` over the frames of ``highway_surround6`` (40 vehicles,
    seed 0), frames read into memory first (reading is not timed); frames per second, median of repeats.
 
@@ -21,6 +22,7 @@ Targets (issue 5): FOTA association under 2 ms; ``saga`` at least 100 frames per
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import time
 from pathlib import Path
@@ -36,7 +38,8 @@ from simrig.trackers.motion import KalmanConfig, innovation_covariances, new_fil
 
 from simrig import trackers as tracker
 
-RIG_TRACKERS = ("saga", "global_hungarian", "percam_merge", "simpletrack", "sort", "deepsort")
+RIG_TRACKERS = ("saga", "global_hungarian", "percam_merge", "simpletrack", "mutr3d", "polymot", "sort", "deepsort",
+                "bytetrack")
 """The trackers that run on any rig (``collabmot`` needs a stereo pair: ``tests/perf/collabmot.py``)."""
 
 
@@ -85,6 +88,7 @@ def main() -> None:
     parser.add_argument("--data", type=Path, default=Path("runs/compare"))
     parser.add_argument("--out", type=Path, default=Path("reports/perf/track.md"))
     args = parser.parse_args()
+    load = os.getloadavg()
 
     predicted, innovation, boxes = association_problem()
     cost_model = MahalanobisCost()
@@ -96,11 +100,14 @@ def main() -> None:
     capped = np.where(allowed, cost, gate)
     augmented, a, b = augmented_problem(capped, np.full(n, 2.0), np.ones(m), result.transported, gate)
     truth_owner = np.concatenate([np.arange(40), np.arange(30)])  # detection j → its car's track
+    cameras = np.concatenate([np.zeros(40), np.ones(30), np.arange(m - 70) % 6]).astype(np.int64)  # clutter: any
     fota_right = int(np.sum(result.owner[:70] == truth_owner))
     hungarian_right = int(np.sum(hungarian(cost, gate)[:70] == truth_owner))
     times = {
         "Mahalanobis cost matrix": per_call_ms(lambda: cost_model(predicted, innovation, boxes), args.repeats),
         "simrig fota (γ 0.1, T 50)": per_call_ms(lambda: fota(cost, gate), args.repeats),
+        "simrig fota, one detection per camera per track": per_call_ms(
+            lambda: fota(cost, gate, cameras=cameras), args.repeats),
         "POT sinkhorn_log (same augmented problem, T 50)": per_call_ms(
             lambda: ot.sinkhorn(a, b, augmented, 0.1, method="sinkhorn_log", numItermax=50, stopThr=0, warn=False),
             args.repeats, calls=50),
@@ -128,7 +135,9 @@ def main() -> None:
     lines = [
         "# Tracker benchmark",
         "",
-        f"Produced by `{command}` ({machine()}, numpy {np.__version__}, POT {ot.__version__}).",
+        f"Produced by `{command}` ({machine()}, numpy {np.__version__}, POT {ot.__version__}; load average "
+        f"{load[0]:.1f} on {os.cpu_count()} cores when it started — the machine is shared, so times are upper "
+        "bounds).",
         "",
         f"## Association, {n} tracks × {m} detections",
         "",

@@ -1,17 +1,21 @@
-"""Benchmark: the cost of visibility (pyrender segmentation + analytic silhouettes) and of the sensor model.
+"""Benchmark: the cost of visibility (segmentation render + analytic silhouettes), one draw call per camera
+against the node-per-actor pyrender renderer it replaced (issue 16), side by side in one run.
 
 Run explicitly (not part of the test suite)::
 
     python tests/perf/visibility.py [--frames 100] [--repeats 2]
 
 Part 1, per camera at the default visibility resolution (``highway_surround6``: 6 cameras, 40 vehicles,
-render scale 0.5 → 800×450): milliseconds for the segmentation render with id decoding and counting, and
-for the analytic silhouettes, measured on the frames of a real run.
+render scale 0.5 → 800×450): milliseconds for the segmentation render with counting — simrig's
+one-draw-call pass (:mod:`simrig.render.segmentation`) and, on the same frame and camera, the previous
+renderer (pyrender ``RenderFlags.SEG`` with one node per actor, colour-coded ids decoded; kept here as the
+peer) in alternating order — and for the analytic silhouettes. Every frame's counts of the two renderers
+are compared; any difference is reported.
 
-Part 2, frames per second of the whole ``simrig generate`` with visibility on and off, runs alternating
-(off, on, off, on, ...) so that machine noise hits both; medians. Target (issue 3): with visibility on at
-the default resolution, at least 4 frames per second. The table is printed and written to
-``reports/perf/visibility.md``.
+Part 2, frames per second of the whole ``simrig generate`` with visibility off, on, and on with the previous
+renderer patched in, runs alternating so that machine noise hits all; medians. Target (issue 3): with
+visibility on at the default resolution, at least 4 frames per second. The table is printed and written
+to ``reports/perf/visibility.md``.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pyrender
 from simrig.scenarios import load_scenario
 from simrig.scenarios.sensor_schema import RenderConfig
 
@@ -42,15 +47,31 @@ REPORT = Path(__file__).resolve().parents[2] / "reports" / "perf" / "visibility.
 SCENARIO = "highway_surround6"
 
 
+def node_per_actor_counts(scene: RigScene, camera, rig, ego) -> np.ndarray:
+    """The renderer simrig used up to commit 3704a39, as the peer: pyrender ``SEG`` with one node (one draw
+    call) per actor, ids as 24-bit colours decoded from the image."""
+    nodes = scene._place_nodes()
+    scene._use_camera(camera, rig, ego)
+    values = np.arange(1, len(nodes) + 1)
+    colours = np.stack([(values >> 16) & 255, (values >> 8) & 255, values & 255], axis=1).astype(np.uint8)
+    image, _ = scene.renderer.render(
+        scene.scene, flags=pyrender.RenderFlags.SEG, seg_node_map=dict(zip(nodes, colours, strict=True))
+    )
+    image = image.astype(np.int32)
+    ids = (image[..., 0] << 16) | (image[..., 1] << 8) | image[..., 2]
+    return np.bincount(ids.ravel(), minlength=len(nodes) + 1)[1:].astype(np.int64)
+
+
 def per_camera_costs(scenario, frames: int, seed: int) -> dict[str, list[float]]:
-    """Milliseconds per camera and frame of each visibility stage on ``frames`` frames of the scenario."""
+    """Milliseconds per camera and frame of each visibility stage on ``frames`` frames of the scenario, and
+    the number of (camera, actor) counts on which the two renderers differ."""
     rig = build_rig(scenario.rig)
     streams = RandomStreams(seed)
     world = TrafficWorld(scenario.traffic, scenario.frame_rate_hz, env_seed=streams.integer_seed("traffic"),
                          rng=streams.generator("population"))
     state = world.reset()
     meter = VisibilityMeter(rig, scenario.render.visibility_scale, RigScene(world.road_markings()))
-    costs = {"segmentation": [], "silhouettes": [], "pairs": []}
+    costs = {"one draw call": [], "node per actor": [], "silhouettes": [], "pairs": [], "differences": 0}
     for frame in range(frames):
         if frame:
             state = world.step()
@@ -60,11 +81,16 @@ def per_camera_costs(scenario, frames: int, seed: int) -> dict[str, list[float]]
         silhouette_pixel_counts(part_boxes(state.boxes, state.classes), meter.rig, state.ego, cameras, actors)
         costs["silhouettes"].append((time.perf_counter() - tick) * 1e3 / len(rig.cameras))
         meter.scene.set_frame(state.ego, state.classes, state.boxes)
-        for camera in meter.rig.cameras:
-            tick = time.perf_counter()
-            meter.scene.visible_pixel_counts(camera, meter.rig, state.ego)
-            if frame:  # the first render of a run pays for shader compilation
-                costs["segmentation"].append((time.perf_counter() - tick) * 1e3)
+        for index, camera in enumerate(meter.rig.cameras):
+            runs = (("one draw call", meter.scene.visible_pixel_counts), ("node per actor", node_per_actor_counts))
+            counts = {}
+            for label, render in runs if (frame + index) % 2 else runs[::-1]:
+                tick = time.perf_counter()
+                counts[label] = render(meter.scene, camera, meter.rig, state.ego) if label == "node per actor" \
+                    else render(camera, meter.rig, state.ego)
+                if frame:  # the first render of a run pays for shader compilation
+                    costs[label].append((time.perf_counter() - tick) * 1e3)
+            costs["differences"] += int((counts["one draw call"] != counts["node per actor"]).sum())
         costs["pairs"].append(len(cameras))
     world.close()
     return costs
@@ -83,18 +109,31 @@ def main() -> int:
                  f"{round(rig.cameras[0].height * scenario.render.visibility_scale)}"
 
     costs = per_camera_costs(scenario, args.frames, args.seed)
-    runs = {"off": [], "on": []}
-    stages = []
+    labels = ("off", "on", "on, node per actor")
+    runs = {label: [] for label in labels}
+    stages = {label: [] for label in labels[1:]}
+    one_draw_call = RigScene.visible_pixel_counts
     with tempfile.TemporaryDirectory() as tmp:
         for repeat in range(args.repeats):
-            for label, variant in (("off", without), ("on", scenario)):
-                result = generate(variant, seed=args.seed, out=Path(tmp) / f"{label}{repeat}", frames=args.frames)
+            for label in labels if repeat % 2 == 0 else labels[::-1]:
+                if label == "on, node per actor":
+                    RigScene.visible_pixel_counts = node_per_actor_counts
+                try:
+                    variant = without if label == "off" else scenario
+                    out = Path(tmp) / f"{len(runs[label])}{label[:3]}{repeat}"
+                    result = generate(variant, seed=args.seed, out=out, frames=args.frames)
+                finally:
+                    RigScene.visible_pixel_counts = one_draw_call
                 runs[label].append(result.times.total)
-                if label == "on":
-                    stages.append(result.times)
+                if label != "off":
+                    stages[label].append(result.times)
     fps = {label: args.frames / statistics.median(times) for label, times in runs.items()}
-    median_stage = {name: 1e3 * statistics.median(getattr(t, name) for t in stages) / args.frames
-                    for name in ("traffic", "projection", "visibility", "sensor", "writing")}
+    median_stage = {
+        label: {name: 1e3 * statistics.median(getattr(t, name) for t in times) / args.frames
+                for name in ("traffic", "projection", "visibility", "sensor", "writing")}
+        for label, times in stages.items()
+    }
+    new, old = statistics.median(costs["one draw call"]), statistics.median(costs["node per actor"])
 
     lines = [
         "# Visibility and generation speed",
@@ -109,20 +148,30 @@ def main() -> int:
         "",
         "| stage | ms per camera (median) | p90 |",
         "| --- | ---: | ---: |",
-        f"| segmentation render + id decoding + counting | {statistics.median(costs['segmentation']):.1f} | "
-        f"{np.percentile(costs['segmentation'], 90):.1f} |",
+        f"| segmentation render + counting, one draw call (simrig now) | {new:.1f} | "
+        f"{np.percentile(costs['one draw call'], 90):.1f} |",
+        f"| segmentation render + id decoding + counting, node per actor (before) | {old:.1f} | "
+        f"{np.percentile(costs['node per actor'], 90):.1f} |",
         f"| analytic silhouettes | {statistics.median(costs['silhouettes']):.2f} | "
         f"{np.percentile(costs['silhouettes'], 90):.2f} |",
         "",
+        f"Render speed-up (before / now, medians): **{old / new:.2f}×**. Counts compared on every frame and "
+        f"camera: {costs['differences']} (camera, actor) counts differ between the two renderers.",
+        "",
         f"Whole `generate`, {args.frames} frames, medians of {args.repeats} alternating runs:",
         "",
-        "| visibility | frames/s | target |",
-        "| --- | ---: | --- |",
-        f"| off | {fps['off']:.1f} | |",
-        f"| on ({resolution}) | {fps['on']:.1f} | ≥ 4 frames/s: {'met' if fps['on'] >= 4 else 'MISSED'} |",
+        "| visibility | frames/s | ms/frame: traffic | projection | visibility | sensor | writing | target |",
+        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | --- |",
+        f"| off | {fps['off']:.1f} | | | | | | |",
+        *(
+            f"| {label} ({resolution}) | {fps[label]:.1f} | "
+            + " | ".join(f"{value:.1f}" for value in median_stage[label].values())
+            + f" | ≥ 4 frames/s: {'met' if fps[label] >= 4 else 'MISSED'} |"
+            for label in labels[1:]
+        ),
         "",
-        f"Ratio on/off: {fps['on'] / fps['off']:.2f}. Where a frame goes with visibility on (ms per frame): "
-        + ", ".join(f"{name} {value:.1f}" for name, value in median_stage.items()) + ".",
+        f"Ratios: on/off {fps['on'] / fps['off']:.2f}; whole `generate` with visibility on, now / before: "
+        f"{fps['on'] / fps['on, node per actor']:.2f}× the frames per second.",
         "",
     ]
     text = "\n".join(lines)

@@ -1,5 +1,5 @@
-"""CollabMOT (seed 002): stereo collaborative 2D tracking on top of two single-camera trackers."""
+"""CollabMOT (Ninh and Kim, IEEE Access 2024): stereo collaborative 2D tracking on top of two single-camera trackers."""
 
-from .tracker import SINGLE_CAMERA_TRACKERS, CollabMOT, collabmot
+from .tracker import SINGLE_CAMERA_TRACKERS, CollabMOT, SemiOnlineCollabMOT, collabmot
 
-__all__ = ["SINGLE_CAMERA_TRACKERS", "CollabMOT", "collabmot"]
+__all__ = ["SINGLE_CAMERA_TRACKERS", "CollabMOT", "SemiOnlineCollabMOT", "collabmot"]

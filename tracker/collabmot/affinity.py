@@ -1,4 +1,5 @@
-"""CollabMOT's affinity cost between ego and remote tracklets (seed 002, §III-C, Eq. 2, 5, 8, 9, Table 10).
+"""CollabMOT's affinity cost between ego and remote tracklets (Ninh and Kim, IEEE Access 2024, §III-C, Eq. 2, 5,
+8, 9, Table 10).
 
 S = Sa·ω_a + Sp·ω_p; Sa is the cosine distance of the two EMA features, ∞ above λ_appearance or when either
 has no feature; Sp is ∞ for the layouts Table 10 rules out, 0 otherwise.

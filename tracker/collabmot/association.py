@@ -1,6 +1,6 @@
-"""CollabMOT's inter-camera tracklet association (seed 002, §III-D): Algorithm 1 (Hungarian on S with
-restarts), Algorithm 2 (association verification, run both ways: mutual verification) and Eq. 6 (which global
-id the pair gets).
+"""CollabMOT's inter-camera tracklet association (Ninh and Kim, IEEE Access 2024, §III-D): Algorithm 1
+(Hungarian on S with restarts), Algorithm 2 (association verification, run both ways: mutual verification) and
+Eq. 6 (which global id the pair gets).
 
 Temporary ids t𝒢 and costs tminS are collected while verifying and written to the tracklets only when the
 round ends without a reset, as Alg. 1 lines 17-18. Choice where the paper is silent: minS of a pair that was
@@ -96,10 +96,8 @@ def associate(ego: list[Tracklet], remote: list[Tracklet], cost: np.ndarray, *, 
     ``remote_all`` are every tracklet of each camera (lost ones included), ``limit`` is λ_appearance and
     ``new_id()`` hands out fresh global ids. Writes 𝒢 and minS to the tracklets and returns the round.
 
-    Choice where the paper leaves the value open: when Eq. 6 asks for a new global id, the pair takes the ego
-    tracklet's own previous global id if it had one (its link was just revoked), else a fresh one, so that
-    an ego tracklet the single-camera tracker kept whole keeps its output identity ("CollabMOT respects and
-    follows the decision of the baseline algorithm", §V)."""
+    When Eq. 6 asks for a new global id, the pair gets a fresh one from ``new_id()``, as the paper says — even
+    if the ego tracklet had an id before (its link was just revoked)."""
     cost = np.array(cost, dtype=float, copy=True)
     result = Round()
     while True:
@@ -123,7 +121,7 @@ def associate(ego: list[Tracklet], remote: list[Tracklet], cost: np.ndarray, *, 
                 revoked.append(tracklet)
             g = combine_ids(forward.global_id, backward.global_id)
             if g == NEW:
-                g = a.global_id if a.global_id > 0 else new_id()
+                g = new_id()
             ids[id(a)] = ids[id(b)] = g
             costs[id(a)] = costs[id(b)] = s
             links.append((a, b, s))

@@ -1,4 +1,4 @@
-"""Recovering the gap of a reconnected tracklet by linear interpolation (seed 002, §III-E, Eq. 7).
+"""Recovering the gap of a reconnected tracklet by linear interpolation (Ninh and Kim, IEEE Access 2024, §III-E, Eq. 7).
 
 Lost tracklet T_k (last frame ``last``) and current tracklet T_i (first frame ``first``) of one camera share a
 global id. Boxes are interpolated between b(t₁) of T_k and b(t₂) of T_i with t₁ = last − ω and

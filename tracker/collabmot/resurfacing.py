@@ -1,4 +1,4 @@
-"""Local tracklet resurfacing (seed 002, §III-D, before Alg. 1).
+"""Local tracklet resurfacing (Ninh and Kim, IEEE Access 2024, §III-D, before Alg. 1).
 
 A single-camera tracker may revive a lost tracklet T_lost after CollabMOT has connected it, through the global
 id, to a newer tracklet T_current of the same camera: both are then reported with one global id. Counting the

@@ -1,5 +1,5 @@
-"""CollabMOT (seed 002): per-camera trackers on a stereo pair whose tracklets repair each other's identity
-switches through global ids.
+"""CollabMOT (Ninh and Kim, IEEE Access 2024): per-camera trackers on a stereo pair whose tracklets repair each
+other's identity switches through global ids.
 
 Each frame: both single-camera trackers step on their camera's detections; every reported box updates its
 tracklet and, when its detection carries an embedding, the tracklet's appearance EMA (Eq. 3-4, the occlusion
@@ -8,11 +8,15 @@ candidates (tracklets reported now whose box is at least ``min_height_px`` tall)
 pair (Eq. 2, 5, 8-9, Alg. 1-2, Eq. 6); a lost ego tracklet reconnected to a current one has its gap
 interpolated ω frames later (Eq. 7), and the boxes are discarded if the connection is revoked.
 
-Output: the ego camera's boxes, each under its tracklet's global id when it has one (else its local id),
-interpolated boxes included. ``step`` returns the current frame as known then; ``finish`` returns the
-semi-online result for every frame: the interpolated boxes, and a tracklet's frames from before its first
-global id relabelled with that id (the paper corrects past output, §II-B; without this a tracklet's first link
-would read as an identity switch). Two boxes under one id in a frame (a resurfaced pair) are merged (mean box).
+Output (online, the default, §III-F): at each frame the ego camera's boxes, each under its tracklet's global id
+*at that time step* when it has one (else its local id). ``step`` is the whole answer: nothing said about a
+frame is revised later, so interpolated gap boxes (which belong to past frames) are not output.
+
+``semi_online=True`` (:class:`SemiOnlineCollabMOT`, reported as "semi-online" wherever it appears) adds
+``finish()``, which replaces every frame's answer after the last frame: the interpolated gap boxes of §III-E,
+and — simrig's departure, not the paper's — each tracklet's frames before its first global id relabelled with
+the id it got later (unbounded hindsight). Two boxes under one id in a frame (a resurfaced pair) are merged
+(mean box).
 """
 
 from __future__ import annotations
@@ -41,6 +45,9 @@ SINGLE_CAMERA_TRACKERS = {"sort": Sort, "deepsort": DeepSort}
 
 class CollabMOT:
     """See the module docstring; parameters default to the paper's values (§IV-C1, Appendix)."""
+
+    revises_past = False
+    """Whether the tracker keeps what it needs to revise past frames in ``finish()`` (semi-online)."""
 
     def __init__(self, *, ego_tracker: str = "sort", remote_tracker: str = "sort", ego_camera: str = "left",
                  remote_camera: str = "right", alpha: float = 0.9, occlusion_limit: float = 0.5,
@@ -131,7 +138,7 @@ class CollabMOT:
                            new_id=self._new_global_id)
         self.association_seconds.append(time.perf_counter() - start)
         self.restarts += result.restarts
-        if self.interpolate:
+        if self.interpolate and self.revises_past:  # gap boxes belong to past frames: semi-online only
             self._connect([(lost, current) for lost, current in result.reconnections if lost.camera == "ego"])
         self._interpolate(t)
         for tracklet in present["ego"]:
@@ -224,6 +231,13 @@ class CollabMOT:
             out[frame].sort(key=lambda track: track.track_id)
         return out
 
+
+class SemiOnlineCollabMOT(CollabMOT):
+    """CollabMOT with hindsight: ``finish()`` revises the past (see the module docstring). Not the paper's
+    per-time-step output; every table that shows it says "semi-online"."""
+
+    revises_past = True
+
     @staticmethod
     def _revised_ids(tracklet: Tracklet) -> dict[int, int]:
         """frame → global id for the semi-online output: a frame where the tracklet had none takes the next
@@ -260,6 +274,9 @@ def collabmot(*, ego_tracker: str = "sort", remote_tracker: str = "sort", ego_ca
               appearance_limit: float = 0.1, weight_appearance: float = 1.0, weight_position: float = 1.0,
               bbox_margin_px: float = 10.0, min_height_px: float = 10.0, interpolation_depth: int = 2,
               interpolation_iou: float = 0.5, interpolation_occlusion: float = 0.5, merged_iou: float = 0.3,
-              coappearance_limit: int = 5, interpolate: bool = True) -> CollabMOT:
-    """CollabMOT on a stereo pair; registered as ``collabmot``."""
-    return CollabMOT(**{k: v for k, v in locals().items()})
+              coappearance_limit: int = 5, interpolate: bool = True, semi_online: bool = False) -> CollabMOT:
+    """CollabMOT on a stereo pair; registered as ``collabmot``. Online (the id at each time step, §III-F)
+    unless ``semi_online``: then the answer for past frames is revised after the last frame (interpolated gap
+    boxes, hindsight relabel)."""
+    params = {k: v for k, v in locals().items() if k != "semi_online"}
+    return SemiOnlineCollabMOT(**params) if semi_online else CollabMOT(**params)

@@ -1,4 +1,4 @@
-"""CollabMOT's tracklet record (seed 002, §III) and its appearance EMA (Eq. 3-4).
+"""CollabMOT's tracklet record (Ninh and Kim, IEEE Access 2024, §III) and its appearance EMA (Eq. 3-4).
 
 A tracklet is one single-camera tracker's track, seen from CollabMOT: its pixel boxes by frame, the
 appearance feature f̃, its global id 𝒢 (−1 while it has none) and minS, the cost of its current inter-camera

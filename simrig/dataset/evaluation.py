@@ -1,0 +1,112 @@
+"""Which 2D ground-truth boxes are ignored when scoring, and by which rule (the scenario's ``[evaluation]``
+table, :class:`~simrig.scenarios.evaluation_schema.EvaluationConfig`, documents each rule and the peer it
+comes from). The scorer and the exports both read it here, so TrackEval on an export ignores what simrig
+ignores."""
+
+from __future__ import annotations
+
+import enum
+
+import numpy as np
+from pydantic import ValidationError
+
+from simrig.scenarios import describe_errors
+from simrig.scenarios.evaluation_schema import EvaluationConfig
+
+from ..errors import SimrigError
+from .ground_truth import GroundTruth
+
+
+class EvaluationError(SimrigError):
+    """Evaluation settings that are not valid; the message names the key (and the file when one set it)."""
+
+
+class IgnoreRule(enum.IntFlag):
+    """Why a 2D ground-truth box is ignored (bit flags: a box may break several rules)."""
+
+    RANGE = enum.auto()
+    """Its centre is at or beyond its class range from the ego (BEV)."""
+    HEIGHT = enum.auto()
+    """Its pixel box is shorter than the minimum height."""
+    VISIBILITY = enum.auto()
+    """Its visible fraction is at or below the minimum."""
+    TRUNCATION = enum.auto()
+    """More of it is outside the image than the maximum truncation."""
+
+
+IGNORE_RULE_NAMES: tuple[str, ...] = tuple(rule.name.lower() for rule in IgnoreRule)
+"""``range``, ``height``, ``visibility``, ``truncation``: the rules in bit order."""
+
+
+def evaluation_of(scenario: dict, override: EvaluationConfig | dict | None = None) -> EvaluationConfig:
+    """The evaluation settings of a dataset's resolved ``scenario`` (its ``evaluation`` table; the defaults for
+    a dataset written before the table existed), with ``override``'s keys on top (validated again)."""
+    if isinstance(override, EvaluationConfig):
+        return override
+    base = dict(scenario.get("evaluation") or {})
+    try:
+        return EvaluationConfig.model_validate({**base, **(override or {})})
+    except ValidationError as error:
+        where = f"{', '.join(f'{k}={v!r}' for k, v in (override or {}).items())} on top of " if override else ""
+        raise EvaluationError(f"evaluation settings ({where}scenario {scenario.get('name')!r}'s [evaluation]): "
+                              f"{describe_errors(error)}") from None
+
+
+def evaluation_overrides(pairs: list[tuple[str, object]] | None) -> dict:
+    """``[evaluation]`` keys from ``KEY=VALUE`` pairs (``simrig score --evaluation``); a dotted key sets one
+    entry of a table (``range_m.car=60``).
+
+    >>> evaluation_overrides([("min_height_px", 40), ("range_m.car", 60)])
+    {'min_height_px': 40, 'range_m': {'car': 60}}
+    """
+    out: dict = {}
+    for key, value in pairs or []:
+        head, _, entry = key.partition(".")
+        if entry:
+            table = out.setdefault(head, {})
+            if not isinstance(table, dict):
+                raise EvaluationError(f"--evaluation {key}: {head} is set as a number too")
+            table[entry] = value
+        else:
+            out[key] = value
+    return out
+
+
+def ignore_rules(truth: GroundTruth, config: EvaluationConfig) -> np.ndarray:
+    """``(R, C)`` :class:`IgnoreRule` bits of every ground-truth box in every camera (0: scored, or not in
+    view). Vectorised over rows and cameras."""
+    rules = np.zeros(truth.in_view.shape, dtype=np.int64)
+    if not config.ignore or rules.size == 0:
+        return rules
+    labels, inverse = np.unique(truth.label.astype(str), return_inverse=True)
+    limit = np.array([config.class_range_m(label) for label in labels])[inverse.reshape(-1)]
+    rules |= np.where(truth.ego_distance >= limit, int(IgnoreRule.RANGE), 0)[:, None]
+    height = truth.boxes2d[..., 3] - truth.boxes2d[..., 1]
+    rules |= np.where(height < config.min_height_px, int(IgnoreRule.HEIGHT), 0)
+    visible = 1.0 - truth.occlusion
+    rules |= np.where(np.isfinite(visible) & (visible <= config.min_visible_fraction), int(IgnoreRule.VISIBILITY), 0)
+    rules |= np.where(truth.truncation > config.max_truncation, int(IgnoreRule.TRUNCATION), 0)
+    return np.where(truth.in_view, rules, 0)
+
+
+def rule_names(mask: int) -> list[str]:
+    """Names of the rules in ``mask``.
+
+    >>> rule_names(int(IgnoreRule.RANGE | IgnoreRule.HEIGHT))
+    ['range', 'height']
+    """
+    return [name for name, rule in zip(IGNORE_RULE_NAMES, IgnoreRule, strict=True) if mask & int(rule)]
+
+
+def ignored_counts(rules: np.ndarray) -> dict[str, int]:
+    """How many boxes of ``rules`` (any shape of :class:`IgnoreRule` bits) are ignored, and by each rule (a box
+    that breaks two rules counts under both; ``ignored`` once).
+
+    >>> ignored_counts(np.array([0, 1, 3]))
+    {'ignored': 2, 'range': 2, 'height': 1, 'visibility': 0, 'truncation': 0}
+    """
+    rules = np.asarray(rules)
+    out = {"ignored": int(np.count_nonzero(rules))}
+    out |= {name: int(np.count_nonzero(rules & int(rule))) for name, rule in zip(IGNORE_RULE_NAMES, IgnoreRule,
+                                                                                  strict=True)}
+    return out

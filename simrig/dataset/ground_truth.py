@@ -1,0 +1,203 @@
+"""The one reader of a dataset's ground truth: every consumer (scorer, exports, figures, the per-frame records
+of :meth:`~simrig.dataset.Dataset.ground_truth_frames`) reads it through :func:`load_ground_truth`.
+
+Row ``r`` is one (frame, actor) of the ``ground_truth`` table, in its order (sorted by frame). Per-camera
+arrays are ``(R, C)`` in rig order. Cause masks are :class:`~simrig.causes.Cause` bit flags.
+Also here: :func:`project_tracks`, a 3D tracker's boxes projected into the cameras exactly as the ground
+truth's own boxes were, so that the scorer and the exports compare the same pixels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..causes import Cause, cause_masks
+from ..errors import DatasetError
+from ..geometry import project_boxes
+from ..types import BOX2D_FIELDS, BOX3D_FIELDS, EgoPose, Rig
+from .tracks_file import TrackRows
+
+if TYPE_CHECKING:
+    from .reader import Dataset
+
+
+@dataclass(frozen=True, eq=False)
+class GroundTruth:
+    """Exact ground truth of a dataset, flat.
+
+    frames: ``(F,)`` frame numbers; timestamps ``(F,)`` [s]; egos: the ego pose per frame; events: the
+    perturbation events active per frame. frame, actor_id, label: ``(R,)``; boxes: ``(R, 9)`` world boxes
+    (:data:`~simrig.types.BOX3D_FIELDS`). Per camera, ``(R, C)``: boxes2d ``(R, C, 4)`` pixel boxes (NaN: not
+    in view); in_view; truncation [0, 1] (fraction of the unclipped projected box outside the image);
+    depth [m] (camera-frame z); occlusion [0, 1] (1 − visible / silhouette pixels; NaN: not rendered);
+    causes: every cause recorded for the actor in that camera; detected: whether that camera's detector
+    reported it; probability: its detection probability.
+    """
+
+    rig: Rig
+    frames: np.ndarray
+    timestamps: np.ndarray
+    egos: tuple[EgoPose, ...]
+    events: tuple[tuple[str, ...], ...]
+    frame: np.ndarray
+    actor_id: np.ndarray
+    label: np.ndarray
+    boxes: np.ndarray
+    boxes2d: np.ndarray
+    in_view: np.ndarray
+    truncation: np.ndarray
+    depth: np.ndarray
+    occlusion: np.ndarray
+    causes: np.ndarray
+    detected: np.ndarray
+    probability: np.ndarray
+
+    @property
+    def miss_causes(self) -> np.ndarray:
+        """``(R, C)`` why each camera did not deliver the actor: its causes where it was missed, 0 where it
+        was detected (an error there is the tracker's own)."""
+        return np.where(self.detected, 0, self.causes)
+
+    @property
+    def miss_causes_3d(self) -> np.ndarray:
+        """``(R,)`` why no camera delivered the actor: 0 if some camera detected it; else the union of the
+        causes of the cameras that had it in view, or ``out_of_view`` when none had."""
+        seen = self.in_view.any(axis=1)
+        in_view_causes = np.bitwise_or.reduce(np.where(self.in_view, self.causes, 0), axis=1)
+        union = np.where(seen, in_view_causes & ~int(Cause.OUT_OF_VIEW), int(Cause.OUT_OF_VIEW))
+        return np.where(self.detected.any(axis=1), 0, union)
+
+    @cached_property
+    def camera_sets(self) -> np.ndarray:
+        """``(R,)`` bit mask of the cameras that have the actor in view (bit c: camera c in rig order)."""
+        return np.sum(self.in_view.astype(np.int64) << np.arange(self.in_view.shape[1]), axis=1)
+
+    @cached_property
+    def ego_distance(self) -> np.ndarray:
+        """``(R,)`` bird's-eye-view distance [m] of each box centre from the ego at its frame."""
+        return self.distance_from_ego(self.frame, self.boxes[:, :2])
+
+    def distance_from_ego(self, frame: np.ndarray, xy: np.ndarray) -> np.ndarray:
+        """BEV distance [m] of world points ``(n, 2)`` at frame numbers ``(n,)`` from the ego at that frame."""
+        position = np.searchsorted(self.frames, frame)
+        ego_xy = np.array([(ego.x, ego.y) for ego in self.egos]).reshape(-1, 2)[position]
+        return np.hypot(xy[:, 0] - ego_xy[:, 0], xy[:, 1] - ego_xy[:, 1])
+
+    def frame_rows(self, position: int) -> slice:
+        """The rows of the ``position``-th frame (rows are sorted by frame)."""
+        lo, hi = np.searchsorted(self.frame, [self.frames[position], self.frames[position] + 1])
+        return slice(int(lo), int(hi))
+
+    def rows_of(self, frame: np.ndarray, actor_id: np.ndarray) -> np.ndarray:
+        """Row index of each (frame, actor id) pair; a ``KeyError`` for a pair not in the ground truth."""
+        key = self._keys(np.asarray(frame), np.asarray(actor_id))
+        if len(key) and len(self._sorted_keys) == 0:
+            raise KeyError("some (frame, actor) pairs are not in the ground truth")
+        position = np.searchsorted(self._sorted_keys, key)
+        position = np.minimum(position, len(self._sorted_keys) - 1)
+        if len(key) and not np.all(self._sorted_keys[position] == key):
+            raise KeyError("some (frame, actor) pairs are not in the ground truth")
+        return self._key_order[position]
+
+    def _keys(self, frame: np.ndarray, actor_id: np.ndarray) -> np.ndarray:
+        return frame.astype(np.int64) * (int(self.actor_id.max(initial=0)) + 1) + actor_id.astype(np.int64)
+
+    @cached_property
+    def _key_order(self) -> np.ndarray:
+        return np.argsort(self._keys(self.frame, self.actor_id), kind="stable")
+
+    @cached_property
+    def _sorted_keys(self) -> np.ndarray:
+        return self._keys(self.frame, self.actor_id)[self._key_order]
+
+
+def _per_camera(table, name: str, n: int, c: int, path) -> np.ndarray:
+    """``(n, c)`` column ``name`` of a per-(frame, actor, camera) table written actor-major in rig order."""
+    if table.num_rows != n * c:
+        raise DatasetError(f"{path}: {table.num_rows} rows of per-camera truth for {n} actors × {c} cameras")
+    return table.column(name).to_numpy(zero_copy_only=False).reshape(n, c)
+
+
+def load_ground_truth(dataset: Dataset) -> GroundTruth:
+    """Read the ground truth, projections, visibility and sensor truth of ``dataset`` into a
+    :class:`GroundTruth` (vectorised; one pass over each table)."""
+    rig = dataset.rig
+    cameras = rig.camera_names
+    c = len(cameras)
+    ego = dataset.table("ego_poses")
+    frames = ego.column("frame").to_numpy().astype(np.int64)
+    ego_columns = {name: ego.column(name).to_numpy() for name in ("x", "y", "z", "yaw", "vx", "vy")}
+    egos = tuple(EgoPose(*(float(ego_columns[name][i]) for name in ego_columns)) for i in range(len(frames)))
+    truth = dataset.table("ground_truth")
+    frame = truth.column("frame").to_numpy().astype(np.int64)
+    actor_id = truth.column("actor_id").to_numpy()
+    n = len(frame)
+    projections = dataset.table("projections")
+    boxes2d = np.stack([_per_camera(projections, name, n, c, dataset.path) for name in BOX2D_FIELDS], axis=-1)
+    ground_truth = GroundTruth(
+        rig=rig,
+        frames=frames,
+        timestamps=ego.column("timestamp").to_numpy(),
+        egos=egos,
+        events=tuple(tuple(row) for row in dataset.table("frames").column("events").to_pylist()),
+        frame=frame,
+        actor_id=actor_id,
+        label=np.asarray(truth.column("class").to_pylist(), dtype=object),
+        boxes=np.column_stack([truth.column(name).to_numpy() for name in BOX3D_FIELDS]).reshape(n, 9),
+        boxes2d=boxes2d.reshape(n, c, 4),
+        in_view=_per_camera(projections, "in_view", n, c, dataset.path).astype(bool),
+        truncation=_per_camera(projections, "truncation", n, c, dataset.path),
+        depth=_per_camera(projections, "depth", n, c, dataset.path),
+        occlusion=_per_camera(dataset.table("visibility"), "occlusion", n, c, dataset.path),
+        causes=np.zeros((n, c), dtype=np.int64),
+        detected=np.zeros((n, c), dtype=bool),
+        probability=np.zeros((n, c)),
+    )
+    sensor = dataset.table("sensor_truth")
+    actor = sensor.column("actor_id").to_numpy()
+    real = actor >= 0
+    if real.any():
+        rows = ground_truth.rows_of(sensor.column("frame").to_numpy()[real], actor[real])
+        camera_of = {name: i for i, name in enumerate(cameras)}
+        camera = np.array([camera_of[name] for name in np.asarray(sensor.column("camera").to_pylist())[real]])
+        ground_truth.causes[rows, camera] = cause_masks(sensor.column("causes").filter(real).to_pylist())
+        ground_truth.detected[rows, camera] = sensor.column("detection").to_numpy()[real] >= 0
+        ground_truth.probability[rows, camera] = sensor.column("probability").to_numpy()[real]
+    return ground_truth
+
+
+def project_tracks(truth: GroundTruth, tracks3d: TrackRows) -> TrackRows:
+    """2D rows of 3D tracks: each box projected into every camera at its frame's ego pose with the ground
+    truth's geometry (:func:`simrig.geometry.project_boxes`: clipped to the near plane and the image), kept
+    where in view; sorted by frame, then track row, then camera."""
+    frame, camera, index, boxes = [], [], [], []
+    names = np.array(truth.rig.camera_names, dtype=object)
+    starts = np.searchsorted(tracks3d.frame, truth.frames)
+    stops = np.searchsorted(tracks3d.frame, truth.frames, side="right")
+    for position, (lo, hi) in enumerate(zip(starts, stops, strict=True)):
+        if hi == lo:
+            continue
+        projection = project_boxes(tracks3d.boxes[lo:hi], truth.rig, truth.egos[position])
+        cam, box = np.nonzero(projection.in_view)
+        order = np.lexsort((cam, box))  # by track row, then camera: stays sorted by frame
+        cam, box = cam[order], box[order]
+        frame.append(np.full(len(box), truth.frames[position]))
+        camera.append(names[cam])
+        index.append(lo + box)
+        boxes.append(projection.boxes[cam, box])
+    if not index:
+        return TrackRows(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, object), np.zeros(0),
+                         np.zeros((0, 4)), np.zeros(0, object))
+    index = np.concatenate(index)
+    return TrackRows(
+        frame=np.concatenate(frame),
+        track_id=tracks3d.track_id[index],
+        label=tracks3d.label[index],
+        score=tracks3d.score[index],
+        boxes=np.concatenate(boxes),
+        camera=np.concatenate(camera),
+    )

@@ -1,0 +1,131 @@
+"""Tracks in MOTChallenge text: one comma-separated file per camera, read into simrig's 2D tracks table.
+
+A line is ``frame, id, left, top, width, height, conf[, …]`` with frames from 1 and pixel boxes (the columns
+after ``conf`` — ``x, y, z`` in MOT16/17 results, ``class, visibility`` in simrig's export — are not read).
+Every line of a file must have as many columns as its first line, at least 7.
+
+Where the files are:
+
+- one file ``CAMERA.txt`` or ``CAMERA-CLASS.txt`` (the camera is the dataset's camera name; ``CLASS`` a simrig
+  class, or ``any``);
+- a folder of such files;
+- the folder written by ``simrig export --format motchallenge`` (``trackers/mot_challenge/SIMRIG-test/NAME/data``
+  inside it), or a ``NAME`` or ``data`` folder of it.
+
+MOTChallenge results carry no class: a file named ``CAMERA-CLASS.txt`` gives its rows that class; any other
+file can be scored only class-agnostically (``--evaluation classes=any``). Errors name the file and line.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+
+from simrig.errors import TracksError
+
+from .tracks_file import CLASSES, TRACKS2D_FILE, TRACKS2D_SCHEMA, _table
+
+MIN_COLUMNS = 7
+COLUMN_NAMES = ("frame", "id", "left", "top", "width", "height", "conf")
+ANY = "any"
+
+
+def result_files(path: Path) -> list[Path]:
+    """The per-camera ``.txt`` files at ``path`` (a file, a folder of them, or an export folder)."""
+    if path.is_file():
+        return [path]
+    exported = path / "trackers" / "mot_challenge"
+    if exported.is_dir():
+        folders = sorted(p for p in exported.glob("*/*/data") if p.is_dir())
+        if len(folders) != 1:
+            names = ", ".join(str(p.parent.relative_to(exported)) for p in folders) or "none"
+            raise TracksError(f"{path}: a MOTChallenge export needs exactly one tracker to score, found: {names}")
+        path = folders[0]
+    elif (path / "data").is_dir():
+        path = path / "data"
+    files = sorted(path.glob("*.txt"))
+    if not files:
+        raise TracksError(f"{path}: holds no MOTChallenge .txt file")
+    return files
+
+
+def camera_and_class(file: Path, cameras: tuple[str, ...]) -> tuple[str, str]:
+    """(camera, class or ``any``) of a file named ``CAMERA.txt`` or ``CAMERA-CLASS.txt``."""
+    stem = file.stem
+    if stem in cameras:
+        return stem, ANY
+    camera, _, label = stem.rpartition("-")
+    if camera in cameras and (label in CLASSES or label == ANY):
+        return camera, label
+    raise TracksError(f"{file}: the file name must be CAMERA.txt or CAMERA-CLASS.txt with a camera of the dataset "
+                      f"({', '.join(cameras)}) and a class ({', '.join(CLASSES)}, or {ANY})")
+
+
+def parse_lines(file: Path, separator: str | None, minimum: int, names: tuple[str, ...]) -> list[tuple[int, list[str]]]:
+    """The non-empty lines of ``file`` as (line number, fields), each with the first line's field count."""
+    try:
+        text = file.read_text()
+    except (OSError, UnicodeDecodeError) as error:
+        raise TracksError(f"{file}: cannot be read as text ({error})") from None
+    lines, expected = [], None
+    for number, line in enumerate(text.splitlines(), start=1):
+        if not line.strip():
+            continue
+        fields = [f.strip() for f in line.split(separator)] if separator else line.split()
+        if expected is None:
+            expected = len(fields)
+            if expected < minimum:
+                raise TracksError(f"{file}:{number}: {expected} columns where at least {minimum} are expected "
+                                  f"({', '.join(names)}, …)")
+        elif len(fields) != expected:
+            raise TracksError(f"{file}:{number}: {len(fields)} columns where {expected} are expected (as on the "
+                              "file's first line)")
+        lines.append((number, fields))
+    return lines
+
+
+def number(file: Path, line: int, fields: list[str], column: int, names: tuple[str, ...]) -> float:
+    """Field ``column`` as a finite float; an error naming file, line and column otherwise."""
+    try:
+        value = float(fields[column])
+    except ValueError:
+        value = float("nan")
+    if not np.isfinite(value):
+        raise TracksError(f"{file}:{line}: column {column + 1} ({names[column]}) is {fields[column]!r}, "
+                          "not a finite number")
+    return value
+
+
+def integer(file: Path, line: int, fields: list[str], column: int, names: tuple[str, ...]) -> int:
+    value = number(file, line, fields, column, names)
+    if value != int(value):
+        raise TracksError(f"{file}:{line}: column {column + 1} ({names[column]}) is {fields[column]!r}, "
+                          "not an integer")
+    return int(value)
+
+
+def read_motchallenge(path: Path, *, frame_count: int, cameras: tuple[str, ...], classes: str) -> dict[str, pa.Table]:
+    """The 2D tracks table of the MOTChallenge files at ``path`` (``classes``: the evaluation's ``classes``
+    setting; rows of a file without a class in its name need ``any``)."""
+    rows = []
+    for file in result_files(path):
+        camera, label = camera_and_class(file, cameras)
+        if label == ANY:
+            if classes != ANY:
+                raise TracksError(f"{file}: MOTChallenge rows carry no class; name the file {camera}-CLASS.txt or "
+                                  "score class-agnostically (--evaluation classes=any)")
+            label = CLASSES[0]  # any label: a class-agnostic score does not read it
+        for line, fields in parse_lines(file, ",", MIN_COLUMNS, COLUMN_NAMES):
+            frame = integer(file, line, fields, 0, COLUMN_NAMES) - 1
+            if not 0 <= frame < frame_count:
+                raise TracksError(f"{file}:{line}: frame {frame + 1} is not in the dataset (frames 1…{frame_count} "
+                                  "in MOTChallenge's 1-based numbering)")
+            track = integer(file, line, fields, 1, COLUMN_NAMES)
+            left, top, width, height, conf = (number(file, line, fields, k, COLUMN_NAMES) for k in range(2, 7))
+            if width <= 0 or height <= 0:
+                raise TracksError(f"{file}:{line}: box width {fields[4]} and height {fields[5]} must be positive")
+            rows.append((frame, camera, track, label, conf, left, top, left + width, top + height))
+    return {TRACKS2D_FILE: _table(rows, TRACKS2D_SCHEMA)}
+

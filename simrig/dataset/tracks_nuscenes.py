@@ -1,0 +1,82 @@
+"""Tracks in the nuScenes tracking-results JSON, read into simrig's 3D tracks table.
+
+``{"meta": {...}, "results": {sample_token: [box, …]}}``; per box ``translation`` (world-frame centre [m]),
+``size`` (width, length, height [m]), ``rotation`` (unit quaternion w, x, y, z; its yaw about +z is kept),
+``velocity`` (vx, vy [m/s]), ``tracking_id`` (a string), ``tracking_name``, ``tracking_score``. A dataset's
+sample tokens are ``SCENARIO-seedN-FFFFFF`` (:func:`sample_token`, as ``simrig export --format nuscenes``
+writes them). Track ids that are all integers are kept; otherwise each distinct id gets a number in sorted
+order. Boxes whose ``tracking_name`` is not a simrig class (``pedestrian``, ``bicycle``, ``trailer`` …) are left
+out. Errors name the file and the line of the sample token in it.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+
+from simrig.errors import TracksError
+
+from .tracks_file import CLASSES, TRACKS3D_FILE, TRACKS3D_SCHEMA, _table
+
+BOX_KEYS = ("translation", "size", "rotation", "velocity", "tracking_id", "tracking_name", "tracking_score")
+
+
+def sample_token(scenario: str, seed: int, frame: int) -> str:
+    """The nuScenes sample token of a dataset's frame."""
+    return f"{scenario}-seed{seed}-{int(frame):06d}"
+
+
+def _line_of(text: str, needle: str) -> int:
+    at = text.find(needle)
+    return text.count("\n", 0, at) + 1 if at >= 0 else 1
+
+
+def read_nuscenes(path: Path, *, tokens: dict[str, int]) -> dict[str, pa.Table]:
+    """The 3D tracks table of the results JSON at ``path``; ``tokens``: the dataset's sample token → frame."""
+    try:
+        text = path.read_text()
+        document = json.loads(text)
+    except (OSError, UnicodeDecodeError) as error:
+        raise TracksError(f"{path}: cannot be read as text ({error})") from None
+    except json.JSONDecodeError as error:
+        raise TracksError(f"{path}:{error.lineno}: not JSON ({error.msg})") from None
+    results = document.get("results") if isinstance(document, dict) else None
+    if not isinstance(results, dict):
+        raise TracksError(f"{path}:1: no \"results\" mapping of sample tokens to boxes (nuScenes tracking results)")
+    known = sorted(tokens, key=tokens.get)
+    boxes = []
+    for token, items in results.items():
+        line = _line_of(text, f'"{token}"')
+        if token not in tokens:
+            raise TracksError(f"{path}:{line}: unknown sample token {token!r} (this dataset's are {known[0]} … "
+                              f"{known[-1]})")
+        if not isinstance(items, list):
+            raise TracksError(f"{path}:{line}: sample {token!r} must map to a list of boxes")
+        for k, box in enumerate(items):
+            missing = [key for key in BOX_KEYS if not isinstance(box, dict) or key not in box]
+            if missing:
+                raise TracksError(f"{path}:{line}: sample {token!r}, box {k}: missing {', '.join(missing)}")
+            if box["tracking_name"] not in CLASSES:
+                continue
+            try:
+                x, y, z = (float(v) for v in box["translation"])
+                width, length, height = (float(v) for v in box["size"])
+                w, qx, qy, qz = (float(v) for v in box["rotation"])
+                vx, vy = (float(v) for v in box["velocity"])
+                score = float(box["tracking_score"])
+            except (TypeError, ValueError) as error:
+                raise TracksError(f"{path}:{line}: sample {token!r}, box {k}: {error} (translation 3, size 3, "
+                                  "rotation 4, velocity 2 numbers, tracking_score a number)") from None
+            yaw = float(np.arctan2(2.0 * (w * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz)))
+            boxes.append((tokens[token], str(box["tracking_id"]), box["tracking_name"], score,
+                          x, y, z, length, width, height, yaw, vx, vy))
+    names = sorted({b[1] for b in boxes})
+    try:
+        number = {name: int(name) for name in names}
+    except ValueError:
+        number = {name: k for k, name in enumerate(names)}
+    rows = [(b[0], number[b[1]], *b[2:]) for b in boxes]
+    return {TRACKS3D_FILE: _table(rows, TRACKS3D_SCHEMA)}
