@@ -113,6 +113,7 @@ def test_replay_out_does_not_delete_a_folder_simrig_did_not_write(small_scenario
 
     replay_file = write_replay(tmp_path / "r.toml", small_scenario.model_copy(update={"frames": 3}), 0,
                                tracker="saga")
+    replay_file.write_text(replay_file.read_text().replace("[scores]", "[scores.2d]\nHOTA = 0.5"))
     (tmp_path / "out" / "dataset").mkdir(parents=True)
     (tmp_path / "out" / "dataset" / "photo.jpg").write_bytes(b"\xff\xd8")
     assert main(["replay", str(replay_file), "--out", str(tmp_path / "out")]) == 2
