@@ -241,10 +241,12 @@ def _cmd_search(args: argparse.Namespace) -> int:
     words = ["simrig", "search", args.space, "--tracker", space.tracker]
     words += [f"--param={key}={value}" for key, value in space.params.items()]
     words += ["--budget", str(space.config.budget), "--sampler", args.sampler, "--seed", str(args.seed)]
+    words += ["--stop-at-failure"] if args.stop_at_failure else []
     command = shlex.join(words + (["--out", str(args.out)] if args.out else []))
     try:
         result = run_search(space, sampler=args.sampler, seed=args.seed, workers=args.workers, out=args.out,
-                            cache=args.cache, progress=not args.quiet, command=command)
+                            cache=args.cache, stop_at_failure=args.stop_at_failure, progress=not args.quiet,
+                            command=command)
     except KeyboardInterrupt:
         print("simrig: interrupted; every finished evaluation is kept: run the same command again to resume",
               file=sys.stderr)
@@ -350,6 +352,7 @@ def build_parser() -> argparse.ArgumentParser:
     search.add_argument("--workers", type=_int_at_least(1), default=1, help="processes for an evaluation's seeds")
     search.add_argument("--out", type=Path, default=None, help="search folder (default: runs/search/SPACE)")
     search.add_argument("--cache", type=Path, default=None, help="datasets by content key (default: OUT/datasets)")
+    search.add_argument("--stop-at-failure", action="store_true", help="end each sampler at its first failing case")
     search.add_argument("--quiet", action="store_true", help="no progress bar")
     search.set_defaults(run=_cmd_search)
 

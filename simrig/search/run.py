@@ -59,9 +59,11 @@ class SearchRun:
 
 def run_search(space: SearchSpace | str | Path, *, sampler: str = "tpe", seed: int = 0, workers: int = 1,
                out: Path | str | None = None, cache: Path | str | None = None, baseline: bool = True,
-               shrink_budget: int = 60, progress: bool = False, command: str | None = None) -> SearchRun:
+               shrink_budget: int = 60, stop_at_failure: bool = False, progress: bool = False,
+               command: str | None = None) -> SearchRun:
     """Search ``space`` (a :class:`SearchSpace`, catalog name or file) with ``sampler`` seeded by ``seed``, and
-    random sampling at the same budget when ``baseline``; ``workers`` processes run an evaluation's seeds.
+    random sampling at the same budget when ``baseline``; ``workers`` processes run an evaluation's seeds;
+    ``stop_at_failure`` ends each sampler at its first failing evaluation (how soon a sampler finds one).
     Everything goes to ``out`` (default ``runs/search/NAME``); datasets to ``cache`` (default ``OUT/datasets``).
     A rerun with the same settings resumes; with other settings it is an error naming the folder."""
     if sampler not in SAMPLERS:
@@ -74,15 +76,17 @@ def run_search(space: SearchSpace | str | Path, *, sampler: str = "tpe", seed: i
     cache = Path(cache) if cache is not None else out / "datasets"
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out):
-        return _run(space, sampler, seed, workers, out, cache, baseline, shrink_budget, progress, command)
+        return _run(space, sampler, seed, workers, out, cache, baseline, shrink_budget, stop_at_failure, progress,
+                    command)
 
 
-def _settings(space: SearchSpace, sampler: str, seed: int, baseline: bool) -> dict:
-    return {"space": space.config.model_dump(mode="json"), "sampler": sampler, "seed": seed, "baseline": baseline}
+def _settings(space: SearchSpace, sampler: str, seed: int, baseline: bool, stop_at_failure: bool) -> dict:
+    return {"space": space.config.model_dump(mode="json"), "sampler": sampler, "seed": seed, "baseline": baseline,
+            "stop_at_failure": stop_at_failure}
 
 
 def _run(space: SearchSpace, sampler: str, seed: int, workers: int, out: Path, cache: Path, baseline: bool,
-         shrink_budget: int, progress: bool, command: str | None) -> SearchRun:
+         shrink_budget: int, stop_at_failure: bool, progress: bool, command: str | None) -> SearchRun:
     import json
 
     from tqdm import tqdm
@@ -90,7 +94,7 @@ def _run(space: SearchSpace, sampler: str, seed: int, workers: int, out: Path, c
     from .report import write_report, write_results
     from .worst import write_worst
 
-    settings = _settings(space, sampler, seed, baseline)
+    settings = _settings(space, sampler, seed, baseline, stop_at_failure)
     previous = out / SEARCH_FILE
     if previous.exists():
         recorded = json.loads(previous.read_text(encoding="utf-8"))
@@ -113,7 +117,8 @@ def _run(space: SearchSpace, sampler: str, seed: int, workers: int, out: Path, c
                   desc=f"search {config.name}") as bar:
             evaluations = {}
             for stream in streams:
-                evaluations[stream], count = _search_stream(space, stream, seed, out, cache, pool, bar)
+                evaluations[stream], count = _search_stream(space, stream, seed, out, cache, pool, bar,
+                                                            stop_at_failure)
                 evaluated_now += count
             evaluations[CONFIRM], count = _confirm(space, evaluations[sampler], out, cache, pool, bar)
             evaluated_now += count
@@ -193,8 +198,9 @@ def _distributions(space: SearchSpace) -> dict:
 
 
 def startup_trials(budget: int) -> int:
-    """Random proposals before a model-based sampler takes over: a fifth of the budget, 3 … 10."""
-    return min(10, max(3, budget // 5))
+    """Random proposals before a model-based sampler takes over: a tenth of the budget, 3 … 10 (Optuna's
+    default is 10 whatever the budget, which leaves a small budget nearly all random)."""
+    return min(10, max(3, budget // 10))
 
 
 def _sampler(stream: str, seed: int, index: int, budget: int):
@@ -223,8 +229,8 @@ def _tell_value(space: SearchSpace, evaluation: Evaluation) -> float | None:
     return None if math.isnan(mean) else mean
 
 
-def _search_stream(space: SearchSpace, stream: str, seed: int, out: Path, cache: Path, pool, bar
-                   ) -> tuple[list[Evaluation], int]:
+def _search_stream(space: SearchSpace, stream: str, seed: int, out: Path, cache: Path, pool, bar,
+                   stop_at_failure: bool = False) -> tuple[list[Evaluation], int]:
     """Every evaluation of one sampler, the finished ones read back into the study, the rest run now."""
     import optuna
     from optuna.trial import TrialState, create_trial
@@ -252,6 +258,9 @@ def _search_stream(space: SearchSpace, stream: str, seed: int, out: Path, cache:
             count += 1
             bar.update(1)
         evaluations.append(evaluation)
+        if stop_at_failure and fails(space, evaluation):
+            bar.update(space.config.budget - index - 1)
+            break
     return evaluations, count
 
 
