@@ -101,7 +101,9 @@ def write_report(space: SearchSpace, evaluations: dict[str, list[Evaluation]], f
     curves = {s: best_so_far(space, items) for s, items in streams.items()}
     marks = sorted({n for n in (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, config.budget) if n <= config.budget})
     lines += ["| evaluations | " + " | ".join(curves) + " |", "|---:|" + "---:|" * len(curves)]
-    lines += [f"| {n} | " + " | ".join(_number(c[n - 1]) if n <= len(c) else "(stopped)" for c in curves.values()) + " |" for n in marks]
+    for n in marks:
+        lines.append(f"| {n} | " + " | ".join(_number(c[n - 1]) if n <= len(c) else "(stopped)"
+                                               for c in curves.values()) + " |")
     if objective.failure is not None:
         lines += ["", "| sampler | first failing evaluation | failing evaluations |", "|---|---:|---:|"]
         lines += [f"| {s} | {first.get(s) or 'none'} | {sum(fails(space, e) for e in items)} of {len(items)} |"
