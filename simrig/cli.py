@@ -237,7 +237,7 @@ def _cmd_search(args: argparse.Namespace) -> int:
 
     tracker = args.tracker  # a tracker the user types may be module:attribute; one in the file may not
     space = load_space(args.space, tracker=tracker, params=_params(args.param) if args.param else None,
-                       budget=args.budget)
+                       budget=args.budget, trust_file=args.trust_file)
     words = ["simrig", "search", args.space, "--tracker", space.tracker]
     words += [f"--param={key}={value}" for key, value in space.params.items()]
     words += ["--budget", str(space.config.budget), "--sampler", args.sampler, "--seed", str(args.seed)]
@@ -352,6 +352,9 @@ def build_parser() -> argparse.ArgumentParser:
     search.add_argument("--workers", type=_int_at_least(1), default=1, help="processes for an evaluation's seeds")
     search.add_argument("--out", type=Path, default=None, help="search folder (default: runs/search/SPACE)")
     search.add_argument("--cache", type=Path, default=None, help="datasets by content key (default: OUT/datasets)")
+    search.add_argument("--trust-file", action="store_true",
+                        help="let the space file import its module:attribute tracker (data files may otherwise only "
+                        "name registered trackers)")
     search.add_argument("--stop-at-failure", action="store_true", help="end each sampler at its first failing case")
     search.add_argument("--quiet", action="store_true", help="no progress bar")
     search.set_defaults(run=_cmd_search)

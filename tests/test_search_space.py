@@ -106,5 +106,5 @@ def test_a_tracker_to_import_in_a_data_file_is_refused_unless_allowed(tmp_path, 
     with pytest.raises(SearchError, match="would import code named in a data file"):
         load_space(path)
     assert not (tmp_path / "imported").exists()  # refused before anything was imported
-    assert load_space(path, allow_import=True).tracker == "planted_tracker_module:factory"
+    assert load_space(path, trust_file=True).tracker == "planted_tracker_module:factory"
     assert (tmp_path / "imported").exists()

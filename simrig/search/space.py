@@ -2,7 +2,8 @@
 setting path and extreme values, the tracker and its parameters, the scorer's metrics.
 
 A data file never makes simrig import code: a ``module:attribute`` tracker in a space file is refused unless the
-caller allows it (``allow_import=True``; the command line allows a tracker the user types with ``--tracker``).
+caller trusts the file (``trust_file=True``, ``--trust-file``; as bench suites and replay files); a tracker the
+user types (``--tracker``, the ``tracker`` argument) is the user's own choice.
 """
 
 from __future__ import annotations
@@ -86,7 +87,7 @@ def _path(name_or_path: str | Path) -> Path:
 
 
 def load_space(name_or_path: str | Path, *, tracker: str | None = None, params: dict | None = None,
-               budget: int | None = None, allow_import: bool = False) -> SearchSpace:
+               budget: int | None = None, trust_file: bool = False) -> SearchSpace:
     """The checked search space of a catalog name or a file; ``tracker``/``params``/``budget`` replace the
     file's. A :class:`SearchError` naming the file and the key otherwise."""
     path = _path(name_or_path)
@@ -109,9 +110,10 @@ def load_space(name_or_path: str | Path, *, tracker: str | None = None, params: 
         config = SearchSpaceConfig.model_validate(raw)
     except ValidationError as error:
         raise SearchError(f"{where}: {describe_errors(error)}") from None
-    if tracker is None and isinstance(file_tracker, str) and ":" in file_tracker and not allow_import:
+    if tracker is None and isinstance(file_tracker, str) and ":" in file_tracker and not trust_file:
         raise SearchError(f"{where}: tracker: {file_tracker!r} would import code named in a data file; name it "
-                          f"yourself (--tracker {file_tracker}) or pass allow_import=True")
+                          f"yourself (--tracker {file_tracker}) or pass --trust-file (trust_file=True) if you trust "
+                          "this file")
     base = _base(config, path, where)
     _check_dimensions(config, base, where)
     _check_objective(config, where)
