@@ -65,3 +65,18 @@ def test_200_repeats_decide_right_with_fewer_runs_than_the_fixed_test(true_rate,
     wrong = sum(v.passed != should_pass for v in verdicts)
     assert wrong <= most_wrong
     assert np.mean([v.runs for v in verdicts]) < fixed_n
+
+
+@pytest.mark.slow
+def test_the_readme_example_decides_on_a_real_tracker_in_a_few_seeds(simrig_scenario):
+    from simrig.testing import run_tracker
+
+    scenario = simrig_scenario("cut_in", frames=50, traffic={"vehicles": 4}, render={"visibility": False})
+
+    def switched(seed):  # one Bernoulli trial per scenario seed
+        return run_tracker("saga", scenario, seed=seed).metrics3d["overall"]["IDS"] > 0
+
+    verdict = assert_rate_below(switched, 0.5, confidence=0.95, good_rate=0.1)
+    # accepted at the first pass that brings k ln 5 + passes ln(5 / 9) to ln 0.05 or below (6 runs with k = 0)
+    k = verdict.failures
+    assert verdict.passed and verdict.runs == k + math.ceil((math.log(20) + k * math.log(5)) / -math.log(5 / 9))
