@@ -7,7 +7,7 @@ Run explicitly (not part of the test suite)::
 The weakness: saga with ``max_age_s = 0.8`` (saga's default is 1.0 s) drops a track after 8 frames without an
 update, so an actor hidden for longer comes back under a new identity. The space
 (tests/perf/spaces/planted_occlusions.toml) searches the lengths (1 … 14 frames) of three occlusions of the
-actor nearest to the ego; a failing case has three ID switches (3d_IDS ≥ 3); the optimiser minimises 3d_AMOTA.
+actor nearest to the ego; a failing case has three ID switches (3d_IDS ≥ 3); the optimiser maximises 3d_IDS.
 Each of ``--runs`` searches (search seeds 0 … runs − 1) runs the optimiser and random sampling until the first
 failing evaluation or the budget (then counted as budget + 1, a lower bound). Datasets are shared between runs
 through one cache (same candidate, same bytes), so repeated candidates cost only tracking and scoring.
@@ -55,7 +55,7 @@ def main() -> None:
              f"Produced by `{command_line()}` on {machine()}.", "",
              f"Space `{SPACE.relative_to(Path(__file__).parents[2]) if SPACE.is_absolute() else SPACE}`: saga with "
              "max_age_s = 0.8 (a track dies after 8 frames without an update); three occlusions of the nearest "
-             "actor, lengths 1 … 14 frames each; failing: 3d_IDS ≥ 3 on seed 0; the optimiser minimises 3d_AMOTA. "
+             "actor, lengths 1 … 14 frames each; failing: 3d_IDS ≥ 3 on seed 0; the optimiser maximises 3d_IDS. "
              f"Budget {args.budget} evaluations per sampler; '>{args.budget}' means none failed (counted as "
              f"{args.budget + 1} in the median, so that median is a lower bound).", "",
              f"| search seed | {args.sampler} | random | seconds |", "|---:|---:|---:|---:|", *rows, "",
