@@ -46,8 +46,12 @@ class Estimate:
 
     @classmethod
     def of(cls, values) -> Estimate:
-        """>>> e = Estimate.of([1.0, 2.0, 3.0]); (e.mean, round(e.high - e.mean, 3))
-        (2.0, 2.484)"""
+        """The estimate of ``values`` (None and NaN left out): the half-width is t(0.975, n − 1)·s/√n.
+
+        >>> e = Estimate.of([1.0, 2.0, 3.0])  # s = 1, t(0.975, 2) = 4.303
+        >>> (e.mean, round(e.high - e.mean, 3))
+        (2.0, 2.484)
+        """
         array = np.asarray([v for v in values if v is not None and not math.isnan(v)], dtype=float)
         if len(array) == 0:
             return cls(math.nan, math.nan, math.nan, 0)

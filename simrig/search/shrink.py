@@ -7,7 +7,8 @@ earlier, to shorten it, and to make the perturbation weaker (fewer actors hidden
 for each setting the smallest candidate value first. A change is kept when the scenario still fails on the
 same seed (``still_fails``), and rounds repeat until none is kept or the evaluation budget is spent. A
 reduction that did not keep the failure is not tried again in a later round (it rarely does after a further
-reduction, and the budget is better spent elsewhere), so the result is small, not guaranteed 1-minimal.
+reduction, and the budget is better spent elsewhere) until a round keeps nothing; then one last round tries
+every reduction again, so with budget enough the result is 1-minimal: no single reduction keeps the failure.
 """
 
 from __future__ import annotations
@@ -96,28 +97,39 @@ def shrink(scenario: Scenario, still_fails: Callable[[Scenario], bool], *, budge
     """The smallest scenario reachable from a failing ``scenario`` by kept reductions, with at most ``budget``
     calls of ``still_fails``. ``on_step(description, kept)`` is told about every candidate tried."""
     result = Shrunk(scenario)
-    progress, rejected = True, set()
-    while progress and result.evaluations < budget:
-        progress = False
-        for description, make in _reductions(result.scenario):
-            if result.evaluations >= budget:
-                break
-            if description in rejected:
-                continue
-            try:
-                candidate = make()
-            except ScenarioError:
-                continue
-            if candidate.frames < _last_window_frame(candidate) + 1:
-                continue
-            result.evaluations += 1
-            kept = still_fails(candidate)
-            if on_step is not None:
-                on_step(description, kept)
-            if not kept:
-                rejected.add(description)
-            else:  # every kept change makes the scenario strictly smaller, so this ends
-                result.scenario, progress = candidate, True
-                result.kept.append(description)
-                break  # the reductions are recomputed from the smaller scenario
+    rejected: set[str] = set()
+    retried = False
+    while result.evaluations < budget:
+        if _step(result, still_fails, rejected, budget, on_step):
+            retried = False
+        elif rejected and not retried:  # a last pass that tries everything again: nothing left to keep
+            rejected.clear()
+            retried = True
+        else:
+            break
     return result
+
+
+def _step(result: Shrunk, still_fails, rejected: set[str], budget: int, on_step) -> bool:
+    """Try the reductions of ``result.scenario`` in order; keep the first that still fails (True)."""
+    for description, make in _reductions(result.scenario):
+        if result.evaluations >= budget:
+            return False
+        if description in rejected:
+            continue
+        try:
+            candidate = make()
+        except ScenarioError:
+            continue
+        if candidate.frames < _last_window_frame(candidate) + 1:
+            continue
+        result.evaluations += 1
+        kept = still_fails(candidate)
+        if on_step is not None:
+            on_step(description, kept)
+        if kept:  # every kept change makes the scenario strictly smaller, so shrinking ends
+            result.scenario = candidate
+            result.kept.append(description)
+            return True
+        rejected.add(description)
+    return False
