@@ -10,6 +10,7 @@ from the search seed), so a search resumed from its fragments proposes what the 
 
 from __future__ import annotations
 
+import json
 import math
 import shlex
 import time
@@ -87,8 +88,6 @@ def _settings(space: SearchSpace, sampler: str, seed: int, baseline: bool, stop_
 
 def _run(space: SearchSpace, sampler: str, seed: int, workers: int, out: Path, cache: Path, baseline: bool,
          shrink_budget: int, stop_at_failure: bool, progress: bool, command: str | None) -> SearchRun:
-    import json
-
     from tqdm import tqdm
 
     from .report import write_report, write_results
