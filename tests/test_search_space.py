@@ -108,3 +108,21 @@ def test_a_tracker_to_import_in_a_data_file_is_refused_unless_allowed(tmp_path, 
     assert not (tmp_path / "imported").exists()  # refused before anything was imported
     assert load_space(path, trust_file=True).tracker == "planted_tracker_module:factory"
     assert (tmp_path / "imported").exists()
+
+
+def test_every_value_of_every_dimension_falls_in_exactly_one_coverage_bin():
+    import numpy as np
+
+    from simrig.search.coverage import bins
+
+    for dimension in load_space("occlusion_gaps").config.dimensions:
+        for name in dimension.names:
+            if dimension.kind == "window":
+                low, high = dimension.start if name.endswith(".start") else dimension.length
+                values = range(low, high + 1)
+            elif dimension.integer:
+                values = range(dimension.low, dimension.high + 1)
+            else:
+                values = np.linspace(dimension.low, dimension.high, 101)
+            tests = [inside for _, inside in bins(dimension, name)]
+            assert all(sum(inside(v) for inside in tests) == 1 for v in values), name

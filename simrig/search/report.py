@@ -12,6 +12,7 @@ import pyarrow as pa
 
 from simrig.benchmark.results import write_table_atomic
 
+from . import coverage
 from .evaluate import Estimate
 from .fragments import Evaluation
 from .space import SearchSpace
@@ -116,7 +117,16 @@ def write_report(space: SearchSpace, evaluations: dict[str, list[Evaluation]], f
         estimate = Estimate.of(e.values(objective.metric))
         lines.append(f"| {rank} | " + " | ".join(_cell(e.candidate.get(n)) or "" for n in names)
                      + f" | {_number(estimate.mean)} [{_number(estimate.low)}, {_number(estimate.high)}] |")
-    lines += ["", "## The worst case, shrunk", ""]
+    lines += ["", "## Coverage: evaluations per bin of each dimension", "",
+              "A 0 is a part of the space this search never tried.", ""]
+    for dimension in config.dimensions:
+        for name in dimension.names:
+            labels = [label for label, _ in coverage.bins(dimension, name)]
+            lines += [f"| `{name}` | " + " | ".join(labels) + " |", "|---|" + "---:|" * len(labels)]
+            lines += [f"| {stream} | " + " | ".join(str(n) for n in coverage.counts(
+                dimension, name, [e.candidate.get(name) for e in items])) + " |" for stream, items in streams.items()]
+            lines.append("")
+    lines += ["## The worst case, shrunk", ""]
     if worst is None:
         lines.append("No evaluation failed: nothing to shrink." if objective.failure is not None
                      else "The space defines no failure (objective.failure): nothing to shrink.")
