@@ -444,6 +444,13 @@ def _safe_to_join(vehicle, front, rear) -> bool:
         vehicle.speed = speed
         return front is None or vehicle.acceleration(vehicle, front) >= -SPAWN_MAX_BRAKING_MPS2
 
+    def rear_allows() -> bool:
+        return rear is None or rear.acceleration(rear, vehicle) >= -SPAWN_MAX_BRAKING_MPS2
+
+    vehicle.speed = top
+    if not rear_allows():  # even at its highest speed: no slower one can do
+        vehicle.speed = drawn
+        return False
     if not front_allows(top):
         allowed, too_fast = top * SPAWN_MIN_SPEED_FRACTION, top
         if not front_allows(allowed):
@@ -453,7 +460,7 @@ def _safe_to_join(vehicle, front, rear) -> bool:
             middle = (allowed + too_fast) / 2.0
             allowed, too_fast = (middle, too_fast) if front_allows(middle) else (allowed, middle)
         vehicle.speed = allowed
-    if rear is not None and rear.acceleration(rear, vehicle) < -SPAWN_MAX_BRAKING_MPS2:
-        vehicle.speed = drawn
-        return False
+        if not rear_allows():
+            vehicle.speed = drawn
+            return False
     return True
