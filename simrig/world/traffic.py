@@ -14,7 +14,9 @@ What this module adds to highway-env (see ``shared/notes/simulation.md`` for the
   drawn one, or the speed of the vehicle behind it if higher) that its gap ahead allows. Placing vehicles at
   their drawn speed 10 m behind slower ones was what made non-ego vehicles crash (~90 crashes in 1,000
   frames of ``highway_surround6``, seed 1). Dense traffic therefore flows at the speed its density allows
-  under IDM (~15 m/s for 40 vehicles in 150 m around the ego on 4 lanes).
+  under IDM (~15 m/s for 40 vehicles in 150 m around the ego on 4 lanes). At reset the window is first
+  filled by bumper clearance alone (the requested density from frame 0, as far as it fits), then initial
+  speeds are lowered until every vehicle, the ego included, can keep its gap (``_settle_initial_speeds``).
 * Crashes of other vehicles: highway-env brakes a crashed vehicle to a standstill and leaves it on the road
   for good, so its lane jams behind it and, after a few crashes, all traffic (the ego too) stands still.
   Rule: a non-ego vehicle that crashes is recorded as a ``vehicle_crashed id=N`` event at the frame in
