@@ -24,7 +24,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "storage": ("simrig.dataset", "simrig.export"),
     "judging": ("simrig.scoring",),
     "pipeline": ("simrig.pipeline",),
-    "orchestration": ("simrig.benchmark", "simrig.testing"),
+    "orchestration": ("simrig.benchmark", "simrig.search", "simrig.testing"),
     "faces": ("simrig.report", "simrig.figures", "simrig.cli", "simrig.api", "simrig.__main__", "simrig"),
 }
 BELOW_DATA = ("records", "scenarios", "geometry")

@@ -24,7 +24,7 @@ def perturbed(tmp_path_factory):
         "relative_speed_mps = 3.0\n"
     )
     out = tmp_path_factory.mktemp("data") / "d"
-    generate(load_scenario(path), seed=4, out=out)
+    generate(load_scenario(path), seed=6, out=out)
     return Dataset.open(out)
 
 

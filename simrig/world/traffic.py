@@ -14,7 +14,9 @@ What this module adds to highway-env (the README's "What simrig does with highwa
   drawn one, or the speed of the vehicle behind it if higher) that its gap ahead allows. Placing vehicles at
   their drawn speed 10 m behind slower ones was what made non-ego vehicles crash (~90 crashes in 1,000
   frames of ``highway_surround6``, seed 1). Dense traffic therefore flows at the speed its density allows
-  under IDM (~15 m/s for 40 vehicles in 150 m around the ego on 4 lanes).
+  under IDM (~15 m/s for 40 vehicles in 150 m around the ego on 4 lanes). At reset the window is first
+  filled by bumper clearance alone (the requested density from frame 0, as far as it fits), then initial
+  speeds are lowered until every vehicle, the ego included, can keep its gap (``_settle_initial_speeds``).
 * Crashes of other vehicles: highway-env brakes a crashed vehicle to a standstill and leaves it on the road
   for good, so its lane jams behind it and, after a few crashes, all traffic (the ego too) stands still.
   Rule: a non-ego vehicle that crashes is recorded as a ``vehicle_crashed id=N`` event at the frame in
@@ -46,8 +48,6 @@ SPAWN_CLEARANCE_M = 10.0
 """[m] minimum bumper-to-bumper distance between a spawned vehicle and any other vehicle."""
 SPAWN_ATTEMPTS = 30
 """[-] random placements tried per missing vehicle and frame before giving up until the next frame."""
-RESET_ATTEMPTS = 300
-"""[-] random placements tried per vehicle when the window is first populated (once per run)."""
 SPAWN_MAX_BRAKING_MPS2 = VEHICLE_TYPES[ActorClass.CAR].ACC_MAX
 """[m/s²] the IDM braking a new vehicle may need, or impose on the vehicle behind it: the hardest braking
 highway-env lets our vehicles do (``ACC_MAX``, 6 m/s²), so IDM can always keep the gaps it starts with.
@@ -150,6 +150,7 @@ class TrafficWorld:
         self._script_vehicles = {}
         events = self._run_scripts()
         self._fill(self.config.initial_clearance_m)
+        self._settle_initial_speeds()
         return self._state(tuple(events))
 
     def step(self) -> GroundTruthFrame:
@@ -204,17 +205,18 @@ class TrafficWorld:
             return
         snapshot = _RoadSnapshot(self.env.unwrapped.road.vehicles)
         for _ in range(missing):
-            attempts = RESET_ATTEMPTS if self._frame == 0 else SPAWN_ATTEMPTS
-            if not self._spawn(min_distance, self.config.window_radius_m, snapshot, attempts):
+            if not self._spawn(min_distance, self.config.window_radius_m, snapshot, join_safely=self._frame > 0):
                 break  # the window is full for now; try again next frame
 
-    def _spawn(self, min_distance: float, max_distance: float, snapshot: _RoadSnapshot, attempts: int) -> bool:
+    def _spawn(self, min_distance: float, max_distance: float, snapshot: _RoadSnapshot, join_safely: bool) -> bool:
         """Place one vehicle on a random lane at a distance from the ego in [min, max]; False if no room.
 
         Room means: :data:`SPAWN_CLEARANCE_M` from every bumper in the lane, and no IDM braking harder than
-        :data:`SPAWN_MAX_BRAKING_MPS2` for the new vehicle or the one behind it (module docstring). The
-        ``attempts`` random placements are drawn at once and their clearance checked in one numpy pass
-        (``(attempts, N)``); the first that has room is taken."""
+        :data:`SPAWN_MAX_BRAKING_MPS2` for the new vehicle or the one behind it (module docstring; at reset,
+        ``join_safely`` is false: speeds are settled afterwards, :meth:`_settle_initial_speeds`). The
+        :data:`SPAWN_ATTEMPTS` random placements are drawn at once and their clearance checked in one numpy
+        pass (``(attempts, N)``); the first that has room is taken."""
+        attempts = SPAWN_ATTEMPTS
         road = self.env.unwrapped.road
         rng = self._rng
         ego_position = self.ego.position
@@ -250,7 +252,7 @@ class TrafficWorld:
                 road, position, heading=heading, speed=speed, target_lane_index=self._lane_indices[picks[attempt]],
                 target_speed=speed,
             )
-            if not _safe_to_join(vehicle, *snapshot.neighbours(along[index], same_lane[index])):
+            if join_safely and not _safe_to_join(vehicle, *snapshot.neighbours(along[index], same_lane[index])):
                 continue
             vehicle.plan_route_to(self._nodes[destinations[attempt]])
             vehicle.simrig_id = self._next_id
@@ -259,6 +261,35 @@ class TrafficWorld:
             snapshot.append(vehicle)
             return True
         return False
+
+    def _settle_initial_speeds(self) -> None:
+        """At reset, after the window is populated (bumper clearance only, as many as fit): lower initial
+        speeds — never target speeds — until no vehicle, the ego included, needs IDM braking harder than
+        :data:`SPAWN_MAX_BRAKING_MPS2` behind the vehicle ahead of it in its lane. Lowering a speed can only
+        make the vehicle behind brake harder, so this repeats until nothing changes (speeds only go down).
+        A non-ego vehicle that would need less than :data:`SPAWN_MIN_SPEED_FRACTION` of its speed is removed."""
+        road = self.env.unwrapped.road
+        for _ in range(len(road.vehicles) + 1):
+            snapshot = _RoadSnapshot(road.vehicles)
+            vehicles = snapshot.vehicles
+            along, same_lane = _lane_offsets(
+                snapshot.positions, np.array([v.heading for v in vehicles]), np.array([v.WIDTH for v in vehicles]),
+                snapshot.positions, snapshot.half_sizes,
+            )
+            changed, removed = False, []
+            for index, vehicle in enumerate(vehicles):
+                front, _ = snapshot.neighbours(along[index], same_lane[index])
+                if front is None or vehicle.acceleration(vehicle, front) >= -SPAWN_MAX_BRAKING_MPS2:
+                    continue
+                changed = True
+                speed = _highest_speed_behind(vehicle, front, vehicle.speed)
+                if speed is None and vehicle is not self.ego:
+                    removed.append(vehicle)
+                vehicle.speed = speed if speed is not None else vehicle.speed * SPAWN_MIN_SPEED_FRACTION
+            if removed:
+                road.vehicles = [v for v in road.vehicles if all(v is not r for r in removed)]
+            if not changed:
+                return
 
     # ------------------------------------------------------------------ scripted vehicles
     def _run_scripts(self) -> list[str]:
@@ -430,30 +461,43 @@ def _blocking(along: np.ndarray, same_lane: np.ndarray, lengths: np.ndarray, hal
     return same_lane & (np.abs(along) < half_sizes[None, :, 0] + lengths[:, None] / 2.0 + SPAWN_CLEARANCE_M)
 
 
+def _highest_speed_behind(vehicle, front, top: float) -> float | None:
+    """[m/s] the highest speed in [:data:`SPAWN_MIN_SPEED_FRACTION` · ``top``, ``top``] at which ``vehicle``'s
+    IDM braking behind ``front`` (None: no vehicle ahead) stays within :data:`SPAWN_MAX_BRAKING_MPS2`, found by
+    bisection (IDM brakes harder the faster it goes); None if even the lowest is too fast. Leaves
+    ``vehicle.speed`` at the last speed tried."""
+
+    def allows(speed: float) -> bool:
+        vehicle.speed = speed
+        return front is None or vehicle.acceleration(vehicle, front) >= -SPAWN_MAX_BRAKING_MPS2
+
+    if allows(top):
+        return top
+    allowed, too_fast = top * SPAWN_MIN_SPEED_FRACTION, top
+    if not allows(allowed):
+        return None
+    for _ in range(SPAWN_SPEED_BISECTIONS):
+        middle = (allowed + too_fast) / 2.0
+        allowed, too_fast = (middle, too_fast) if allows(middle) else (allowed, middle)
+    return allowed
+
+
 def _safe_to_join(vehicle, front, rear) -> bool:
     """Whether ``vehicle`` can join its lane between ``front`` and ``rear`` (either None) without IDM braking
     harder than :data:`SPAWN_MAX_BRAKING_MPS2`, for itself or for ``rear``, and at which speed (set on
     ``vehicle``): the highest speed, from its drawn speed or the speed of ``rear`` if that is higher (merging
     at the lane's speed) down to :data:`SPAWN_MIN_SPEED_FRACTION` of that, at which its own IDM braking stays
-    within the limit (bisection: IDM brakes harder the faster it goes), provided ``rear`` then does too (the
-    slower the new vehicle, the harder ``rear`` brakes). Its target speed stays the drawn one."""
+    within the limit (:func:`_highest_speed_behind`), provided ``rear`` then does too (the slower the new
+    vehicle, the harder ``rear`` brakes). Its target speed stays the drawn one."""
     drawn = vehicle.speed
     top = drawn if rear is None else max(drawn, rear.speed)
 
-    def front_allows(speed: float) -> bool:
+    def rear_allows(speed: float) -> bool:
         vehicle.speed = speed
-        return front is None or vehicle.acceleration(vehicle, front) >= -SPAWN_MAX_BRAKING_MPS2
+        return rear is None or rear.acceleration(rear, vehicle) >= -SPAWN_MAX_BRAKING_MPS2
 
-    if not front_allows(top):
-        allowed, too_fast = top * SPAWN_MIN_SPEED_FRACTION, top
-        if not front_allows(allowed):
-            vehicle.speed = drawn
-            return False
-        for _ in range(SPAWN_SPEED_BISECTIONS):
-            middle = (allowed + too_fast) / 2.0
-            allowed, too_fast = (middle, too_fast) if front_allows(middle) else (allowed, middle)
-        vehicle.speed = allowed
-    if rear is not None and rear.acceleration(rear, vehicle) < -SPAWN_MAX_BRAKING_MPS2:
+    speed = _highest_speed_behind(vehicle, front, top) if rear_allows(top) else None  # rear: fail fast at top
+    if speed is None or not rear_allows(speed):
         vehicle.speed = drawn
         return False
     return True

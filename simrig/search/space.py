@@ -1,0 +1,179 @@
+"""A search space loaded and checked against everything it names: the base scenario, every dimension's
+setting path and extreme values, the tracker and its parameters, the scorer's metrics.
+
+A data file never makes simrig import code: a ``module:attribute`` tracker in a space file is refused unless the
+caller trusts the file (``trust_file=True``, ``--trust-file``; as bench suites and replay files); a tracker the
+user types (``--tracker``, the ``tracker`` argument) is the user's own choice.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from simrig.benchmark.evaluate import METRIC_COLUMNS
+from simrig.pipeline.track import TrackingError, build_tracker
+from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
+from simrig.scenarios import Scenario, ScenarioError, describe_errors, load_scenario
+from simrig.scenarios.overrides import get_setting, with_setting
+from simrig.scenarios.search_schema import Dimension, SearchSpaceConfig, space_catalog
+
+from ..errors import SimrigError
+
+Candidate = dict[str, Any]
+"""Values of one evaluation by parameter name (:attr:`Dimension.names`)."""
+
+
+class SearchError(SimrigError):
+    """A search space cannot be found or is invalid, or a search cannot run; the message names file and key."""
+
+
+@dataclass(frozen=True)
+class SearchSpace:
+    """A checked search space: its settings, its file, and its base scenario (frames and ``base_settings``
+    applied)."""
+
+    config: SearchSpaceConfig
+    path: Path
+    base: Scenario
+
+    @property
+    def tracker(self) -> str:
+        return self.config.tracker
+
+    @property
+    def params(self) -> dict:
+        return dict(self.config.params)
+
+    def scenario_for(self, candidate: Candidate) -> Scenario:
+        """The base scenario with every dimension set to its value in ``candidate``."""
+        scenario = self.base
+        for dimension in self.config.dimensions:
+            scenario = with_setting(scenario, dimension.path, setting_value(dimension, candidate))
+        return scenario
+
+
+def setting_value(dimension: Dimension, candidate: Candidate) -> Any:
+    """The value a dimension writes into the scenario: ``[start, start + length − 1]`` for a window."""
+    if dimension.kind == "window":
+        start = int(candidate[f"{dimension.path}.start"])
+        return [start, start + int(candidate[f"{dimension.path}.length"]) - 1]
+    return candidate[dimension.path]
+
+
+def _extremes(dimension: Dimension) -> list[Candidate]:
+    """Candidates at a dimension's corners (every choice), to check that each is a valid scenario."""
+    if dimension.kind == "choice":
+        return [{dimension.path: choice} for choice in dimension.choices]
+    if dimension.kind == "range":
+        return [{dimension.path: dimension.low}, {dimension.path: dimension.high}]
+    start, length = dimension.names
+    return [{start: s, length: n} for s in dimension.start for n in dimension.length]
+
+
+def _path(name_or_path: str | Path) -> Path:
+    entries = space_catalog()
+    text = str(name_or_path)
+    if text in entries and not Path(text).suffix:
+        return entries[text]
+    path = Path(text)
+    if not path.is_file():
+        raise SearchError(f"unknown search space {text!r}: not a catalog space ({', '.join(entries)}) nor a "
+                          ".toml file")
+    return path
+
+
+def load_space(name_or_path: str | Path, *, tracker: str | None = None, params: dict | None = None,
+               budget: int | None = None, trust_file: bool = False) -> SearchSpace:
+    """The checked search space of a catalog name or a file; ``tracker``/``params``/``budget`` replace the
+    file's. A :class:`SearchError` naming the file and the key otherwise."""
+    path = _path(name_or_path)
+    where = f"search space file {str(path)!r}"
+    try:
+        with path.open("rb") as handle:
+            raw = tomllib.load(handle)
+    except tomllib.TOMLDecodeError as error:
+        raise SearchError(f"{where}: not valid TOML: {error}") from None
+    raw.setdefault("name", path.stem)
+    file_tracker = raw.get("tracker")
+    if tracker is not None:
+        raw["tracker"] = tracker
+        raw["params"] = {}
+    if params is not None:
+        raw["params"] = dict(params)
+    if budget is not None:
+        raw["budget"] = budget
+    try:
+        config = SearchSpaceConfig.model_validate(raw)
+    except ValidationError as error:
+        raise SearchError(f"{where}: {describe_errors(error)}") from None
+    if tracker is None:  # the space file's own tracker: data, so no module:attribute unless trusted
+        try:
+            check_file_reference(file_tracker, trusted=trust_file, where=where)
+        except TrackerReferenceError as error:
+            raise SearchError(str(error)) from None
+    base = _base(config, path, where)
+    _check_dimensions(config, base, where)
+    _check_objective(config, where)
+    try:
+        build_tracker(config.tracker, dict(config.params))
+    except TrackingError as error:
+        raise SearchError(f"{where}: tracker: {error}") from None
+    return SearchSpace(config, path, base)
+
+
+def _base(config: SearchSpaceConfig, path: Path, where: str) -> Scenario:
+    target = config.base if Path(config.base).suffix != ".toml" else path.parent / config.base
+    try:
+        base = load_scenario(target)
+        if config.frames is not None:
+            base = with_setting(base, "frames", config.frames)
+        for key, value in config.base_settings.items():
+            try:
+                base = with_setting(base, key, value)
+            except ScenarioError as error:
+                raise ScenarioError(f"base_settings.{key}: {error}") from None
+    except ScenarioError as error:
+        raise SearchError(f"{where}: base: {error}") from None
+    return base
+
+
+def _check_dimensions(config: SearchSpaceConfig, base: Scenario, where: str) -> None:
+    for index, dimension in enumerate(config.dimensions):
+        key = f"dimensions.{index}.path ({dimension.path})"
+        try:
+            current = get_setting(base, dimension.path)
+        except ScenarioError as error:
+            raise SearchError(f"{where}: {key}: {error}") from None
+        if dimension.kind == "window":
+            if not (isinstance(current, (list, tuple)) and len(current) == 2):
+                raise SearchError(f"{where}: {key}: a start/length window needs a [first, last] setting, "
+                                  f"{base.name} has {current!r} there")
+            last = dimension.start[1] + dimension.length[1] - 1
+            if last >= base.frames:
+                raise SearchError(f"{where}: dimensions.{index}.length: the window can end at frame {last}, past "
+                                  f"the last frame {base.frames - 1} of the {base.frames}-frame scenario")
+        if dimension.kind == "choice":
+            bad = [c for c in dimension.choices if not isinstance(c, (bool, int, float, str))]
+            if bad:
+                raise SearchError(f"{where}: dimensions.{index}.choices: {bad[0]!r} is not a number, string "
+                                  "or boolean")
+        for candidate in _extremes(dimension):
+            try:
+                with_setting(base, dimension.path, setting_value(dimension, candidate))
+            except ScenarioError as error:
+                raise SearchError(f"{where}: {key}: {error}") from None
+
+
+def _check_objective(config: SearchSpaceConfig, where: str) -> None:
+    named = [("objective.metric", config.objective.metric)]
+    if config.objective.failure is not None and config.objective.failure.metric is not None:
+        named.append(("objective.failure.metric", config.objective.failure.metric))
+    for key, metric in named:
+        if metric not in METRIC_COLUMNS:
+            raise SearchError(f"{where}: {key}: {metric!r} is not a metric the scorer reports; known: "
+                              f"{', '.join(METRIC_COLUMNS)}")

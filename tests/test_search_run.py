@@ -1,0 +1,155 @@
+"""simrig search end to end on tiny scenarios: resumable after SIGINT and SIGKILL without repeating or losing an
+evaluation, and the shrunk worst case's pytest file fails on the weak tracker and passes on saga."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pyarrow.parquet as pq
+import pytest
+
+from simrig.search import load_space, run_search
+from simrig.search.fragments import FOLDER
+
+TINY = """
+name = "tiny"
+base = "highway_surround6"
+frames = 12
+tracker = "saga"
+budget = 4
+seeds = 1
+confirm_top = 1
+confirm_seeds = 1
+
+[base_settings]
+"render.visibility" = false
+"traffic.vehicles" = 2
+"traffic.spawn_min_distance_m" = 60.0
+"traffic.window_radius_m" = 80.0
+"perturbations" = [{ kind = "miss_burst", frames = [2, 4], probability = 0.5 }]
+
+[objective]
+metric = "2d_IDF1"
+direction = "minimize"
+
+[[dimensions]]
+path = "perturbations.0.frames"
+start = [0, 4]
+length = [1, 6]
+
+[[dimensions]]
+path = "perturbations.0.probability"
+low = 0.0
+high = 1.0
+"""
+
+
+def _fragments(out: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(out)): p.read_bytes() for p in sorted((out / FOLDER).glob("*/*.json"))}
+
+
+def _without_seconds(raw: bytes) -> dict:
+    document = json.loads(raw)
+    document.pop("seconds")
+    return document
+
+
+def _start(space: Path, out: Path, cache: Path) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "simrig.cli", "search", str(space), "--out", str(out),
+                             "--cache", str(cache), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+
+
+def _interrupt_after(process: subprocess.Popen, out: Path, count: int, sig: int) -> tuple[int, str]:
+    deadline = time.monotonic() + 300
+    while len(_fragments(out)) < count and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    process.send_signal(sig)
+    _, error = process.communicate(timeout=120)
+    return process.returncode, error.decode()
+
+
+def test_a_search_interrupted_by_sigkill_and_sigint_resumes_without_repeating_or_losing_evaluations(tmp_path):
+    space = tmp_path / "tiny.toml"
+    space.write_text(TINY, encoding="utf-8")
+    cache = tmp_path / "cache"  # shared: the interrupted search finds the reference's datasets (same bytes)
+    reference = run_search(load_space(space), out=tmp_path / "reference", cache=cache)
+    expected = _fragments(tmp_path / "reference")
+    assert len(expected) == 4 + 4 + 1 and reference.evaluated_now == 9
+
+    out = tmp_path / "interrupted"
+    code, _ = _interrupt_after(_start(space, out, cache), out, 2, signal.SIGKILL)
+    assert code == -signal.SIGKILL
+    after_kill = _fragments(out)
+    assert 2 <= len(after_kill) < 9 and not (out / "results.parquet").exists()
+
+    code, error = _interrupt_after(_start(space, out, cache), out, len(after_kill) + 2, signal.SIGINT)
+    assert code == 130 and "run the same command again to resume" in error
+    after_int = _fragments(out)
+    assert {k: v for k, v in after_int.items() if k in after_kill} == after_kill  # nothing run twice
+    assert len(after_int) < 9 and not (out / "report.md").exists()
+
+    finished = subprocess.run([sys.executable, "-m", "simrig.cli", "search", str(space), "--out", str(out),
+                               "--cache", str(cache), "--quiet"], capture_output=True, text=True, timeout=300)
+    assert finished.returncode == 0, finished.stderr
+    assert f"{9 - len(after_int)} evaluations run now" in finished.stdout
+    final = _fragments(out)
+    assert {k: v for k, v in final.items() if k in after_int} == after_int
+    assert sorted(final) == sorted(expected)  # none lost
+    # proposals depend only on finished evaluations: the resumed search made the uninterrupted one's
+    assert {k: _without_seconds(v) for k, v in final.items()} == {k: _without_seconds(v) for k, v in expected.items()}
+    table = pq.read_table(out / "results.parquet")
+    assert table.num_rows == 9
+    assert sorted(table.column("stream").to_pylist()) == ["confirm"] + ["random"] * 4 + ["tpe"] * 4
+
+
+WEAK = """
+name = "weak_occlusion"
+base = "highway_surround6"
+frames = 30
+tracker = "saga"
+params = { max_age_s = 0.3 }   # the planted weakness: a track dies after 3 frames without an update
+budget = 3
+seeds = 1
+confirm_top = 0
+
+[base_settings]
+"render.visibility" = false
+"traffic.vehicles" = 3
+"traffic.spawn_min_distance_m" = 60.0
+"traffic.window_radius_m" = 80.0
+"perturbations" = [{ kind = "occlude", nearest = 1, frames = [5, 9] }]
+
+[objective]
+metric = "2d_IDF1"
+direction = "minimize"
+failure = { metric = "3d_IDS", at_least = 1 }
+
+[[dimensions]]
+path = "perturbations.0.frames"
+start = [3, 8]
+length = [6, 10]
+"""
+
+
+@pytest.mark.slow
+def test_the_shrunk_worst_case_test_fails_on_the_weak_tracker_and_passes_on_saga(tmp_path):
+    space = tmp_path / "weak.toml"
+    space.write_text(WEAK, encoding="utf-8")
+    result = run_search(load_space(space), out=tmp_path / "search", shrink_budget=25)
+    assert result.first_failure["tpe"] is not None and result.worst is not None
+    log = json.loads((result.worst / "shrink.json").read_text())
+    assert log["after"]["actors"] <= 3 and log["after"]["frames"] <= 30
+    assert log["after"]["actors"] < log["before"]["actors"]  # it did shrink
+    test = result.worst / "test_worst_case.py"
+    command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(test)]
+    weak = subprocess.run(command, capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert weak.returncode == 1 and "still fails the shrunk worst case" in weak.stdout, weak.stdout
+    saga = subprocess.run(command, capture_output=True, text=True, timeout=300, cwd=tmp_path,
+                          env=os.environ | {"SIMRIG_TRACKER": "saga", "SIMRIG_TRACKER_PARAMS": "{}"})
+    assert saga.returncode == 0, saga.stdout
