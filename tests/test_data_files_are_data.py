@@ -4,8 +4,10 @@ without ``--trust-file``; a real ``module:attribute`` tracker runs once the user
 import subprocess
 import sys
 import textwrap
+import tomllib
 
 import pytest
+import tomli_w
 
 from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.pipeline.trust import is_tracker_factory
@@ -43,11 +45,19 @@ def test_hostile_suite_is_refused_and_its_command_never_runs(tmp_path, trust):
     assert not target.exists()
 
 
+def _with_scores(path):
+    """A replay file as an attacker would send it: with recorded scores, so that only the tracker is at issue."""
+    document = tomllib.loads(path.read_text())
+    document["scores"] = {"2d": {"HOTA": 0.5}}
+    path.write_text(tomli_w.dumps(document))
+    return path
+
+
 @pytest.mark.parametrize("trust", [False, True])
 def test_hostile_replay_file_is_refused_and_its_command_never_runs(tmp_path, small_scenario, trust):
     target = tmp_path / "pwned.txt"
-    replay_file = write_replay(tmp_path / "bug.toml", small_scenario, 0, tracker="os:system",
-                               params={"command": f"echo pwned > {target}"})
+    replay_file = _with_scores(write_replay(tmp_path / "bug.toml", small_scenario, 0, tracker="os:system",
+                                            params={"command": f"echo pwned > {target}"}))
     run = _simrig("replay", replay_file, *(["--trust-file"] if trust else []), cwd=tmp_path)
     assert run.returncode == 2, run.stderr
     lines = run.stderr.strip().splitlines()
@@ -103,10 +113,15 @@ def test_factory_check_accepts_classes_and_annotated_functions(tmp_path, monkeyp
     assert type(build_tracker("my_trackers:make", {"gate": 4.0})).__name__ == "Wrapped"
 
 
-def test_with_trust_file_a_real_module_attribute_tracker_runs(tmp_path, small_scenario):
+def test_with_trust_file_a_real_module_attribute_tracker_runs(tmp_path, small_scenario, monkeypatch):
+    import simrig
+
     (tmp_path / "my_trackers.py").write_text(MY_TRACKERS)
+    monkeypatch.syspath_prepend(str(tmp_path))
     short = small_scenario.model_copy(update={"frames": 5})
-    replay_file = write_replay(tmp_path / "mine.toml", short, 0, tracker="my_trackers:Wrapped")
+    dataset = simrig.generate(short, out=tmp_path / "recorded", seed=0)
+    scores = simrig.score(dataset, simrig.track(dataset, "my_trackers:Wrapped"))  # what the failing test saw
+    replay_file = write_replay(tmp_path / "mine.toml", short, 0, tracker="my_trackers:Wrapped", scores=scores)
     env = {**__import__("os").environ, "PYTHONPATH": str(tmp_path)}
     refused = _simrig("replay", replay_file, cwd=tmp_path, env=env)
     assert refused.returncode == 2 and "--trust-file" in refused.stderr

@@ -113,6 +113,7 @@ def test_replay_out_does_not_delete_a_folder_simrig_did_not_write(small_scenario
 
     replay_file = write_replay(tmp_path / "r.toml", small_scenario.model_copy(update={"frames": 3}), 0,
                                tracker="saga")
+    replay_file.write_text(replay_file.read_text().replace("[scores]", "[scores.2d]\nHOTA = 0.5"))
     (tmp_path / "out" / "dataset").mkdir(parents=True)
     (tmp_path / "out" / "dataset" / "photo.jpg").write_bytes(b"\xff\xd8")
     assert main(["replay", str(replay_file), "--out", str(tmp_path / "out")]) == 2
@@ -174,3 +175,20 @@ def test_partial_folders_are_unique_per_process(tmp_path):
     names = {subprocess.run([sys.executable, "-c", code, str(tmp_path / "out")], capture_output=True, text=True,
                             check=True).stdout.strip() for _ in range(2)}
     assert len(names) == 2 and all(name.startswith(".out.partial-") for name in names)
+
+
+def test_a_damaged_or_older_simrig_dataset_is_replaced_only_with_overwrite(small_scenario, tmp_path, capsys):
+    """A dataset whose manifest no longer checks out (edited, or written before manifest_sha256) is still simrig's:
+    refused without --overwrite, regenerated with it (the bench's cache does so on its own)."""
+    from simrig.pipeline.cache import cached_dataset
+
+    scenario = small_scenario.model_copy(update={"frames": 3})
+    first = cached_dataset(scenario, 0, None, tmp_path / "cache")
+    _edit_manifest(first.path, lambda manifest: manifest.pop("manifest_sha256"))
+    again = cached_dataset(scenario, 0, None, tmp_path / "cache")  # regenerated in place
+    assert again.path == first.path and "manifest_sha256" in again.manifest
+    _edit_manifest(again.path, lambda manifest: manifest.update(frames=99))
+    argv = ["generate", "--frames", "2", "--out", str(again.path), "--quiet"]
+    assert main(argv) == 2 and "holds a simrig dataset that cannot be read" in _error(capsys)
+    assert main([*argv, "--overwrite"]) == 0
+    assert Dataset.open(again.path).frame_count == 2

@@ -115,6 +115,16 @@ def write_json_atomic(path: Path, data: dict) -> None:
     os.replace(temporary, path)
 
 
+def written_by_simrig(folder: Path) -> bool:
+    """Whether ``folder`` holds a ``manifest.json`` that simrig wrote (a JSON object of our format), whatever its
+    state: complete or not, damaged or from an older simrig. Such a folder is one ``--overwrite`` may replace."""
+    try:
+        manifest = json.loads((folder / MANIFEST_NAME).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(manifest, dict) and manifest.get("format") == FORMAT_NAME
+
+
 def read_manifest(folder: Path) -> dict | None:
     """The manifest of ``folder`` if it exists and says ``complete: true``; ``None`` otherwise."""
     path = folder / MANIFEST_NAME

@@ -27,6 +27,7 @@ from .manifest import (
     manifest_digest,
     read_manifest,
     write_json_atomic,
+    written_by_simrig,
 )
 from .outputs import check_output_path, partial_sibling, remove_stale_partials
 from .tables import SCHEMAS
@@ -41,7 +42,15 @@ def check_output_folder(out: Path, *, overwrite: bool) -> None:
     check_output_path(out, what="output folder")
     if not out.exists():
         return
-    manifest = read_manifest(out)
+    try:
+        manifest = read_manifest(out)
+    except DatasetError as error:  # ours, but damaged or from an older simrig: replaceable with overwrite
+        if not written_by_simrig(out):
+            raise
+        if overwrite:
+            return
+        raise DatasetExistsError(f"output folder {str(out)!r} holds a simrig dataset that cannot be read ({error}); "
+                                 "pass --overwrite to replace it") from None
     if manifest is not None and not overwrite:
         raise DatasetExistsError(
             f"output folder {str(out)!r} already holds a complete dataset "

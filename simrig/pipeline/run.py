@@ -32,7 +32,7 @@ from pathlib import Path
 
 from simrig.dataset import Dataset
 from simrig.dataset.manifest import read_manifest, write_json_atomic
-from simrig.errors import DatasetExistsError
+from simrig.errors import DatasetError, DatasetExistsError
 from simrig.pipeline.generate import generate
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
 from simrig.pipeline.track import TrackingRun, build_tracker, run_tracker
@@ -75,7 +75,10 @@ def _matching_dataset(folder: Path, scenario: Scenario, seed: int, frames: int) 
     holds no complete dataset."""
     if not folder.is_dir():
         return None
-    manifest = read_manifest(folder)
+    try:
+        manifest = read_manifest(folder)
+    except DatasetError:  # a damaged dataset, or one from an older simrig: never reused
+        return False
     if manifest is None:
         return None
     return (manifest["scenario"] == scenario.model_dump(mode="json") and manifest["seed"] == seed
@@ -115,7 +118,7 @@ def run_pipeline(
     generation_s = None
     if not reused:
         if matches is False and not overwrite:
-            manifest = read_manifest(folder)
+            manifest = read_manifest(folder)  # a damaged one raises its own one-line error here
             raise DatasetExistsError(
                 f"{str(folder)!r} holds a dataset of another scenario, seed or frame count, or without images "
                 f"({manifest['scenario']['name']}, seed {manifest['seed']}, {manifest['frames']} frames"
