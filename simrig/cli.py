@@ -324,6 +324,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--camera", default=None, metavar="NAME", help="score only this camera, in 2D")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(run=_cmd_run)
+    from .detector.cli import add_detector_command
+
+    add_detector_command(commands)
     return parser
 
 
