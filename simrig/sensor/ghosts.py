@@ -1,7 +1,7 @@
 """Ghosts: false positives with a life of their own, one 3D box each, seen consistently by every camera.
 
 Once per frame (before the cameras) the ghost world advances: each ghost dies with probability
-1 − exp(−Δt / mean_life) (so lives are exponential with the configured mean in seconds at any frame rate;
+min(1, Δt / mean_life) (so lives are geometric with mean mean_life / Δt frames at any frame rate;
 a shadow ghost also dies with its vehicle), then Poisson(birth_rate · Δt) ghosts are born. A static ghost
 stands on the ground at a uniform point of the ring ``range_m`` around the ego, with a class from the
 traffic's mix, that class's size, a uniform heading and zero velocity. A shadow ghost picks a vehicle
@@ -65,7 +65,7 @@ class GhostWorld:
         """Deaths, births and motion for ``frame``; then project every ghost into every camera."""
         c, rng = self.config, self._world
         g = len(self.ids)
-        dies = rng.random(g) < 1.0 - np.exp(-self.period_s / c.mean_life_s)
+        dies = rng.random(g) < min(1.0, self.period_s / c.mean_life_s)
         order = np.argsort(actor_ids, kind="stable")
         position = np.minimum(np.searchsorted(actor_ids[order], self.shadowed), max(len(actor_ids) - 1, 0))
         row = order[position] if len(actor_ids) else np.zeros(g, dtype=np.int64)

@@ -43,7 +43,7 @@ class ActorState:
         """Remember ``values`` for exactly the frame's actors (actors no longer present are forgotten)."""
         order = np.argsort(actor_ids, kind="stable")
         self.ids = np.asarray(actor_ids, dtype=np.int64)[order]
-        self.values = np.asarray(values, dtype=float).reshape(len(actor_ids), -1)[order]
+        self.values = np.asarray(values, dtype=float).reshape(len(actor_ids), self.values.shape[1])[order]
 
 
 class GaussMarkov:
