@@ -60,10 +60,10 @@ PRESETS: dict[str, dict[str, Any]] = {
         "embedding": {"sigma": 0.0, "occlusion_sigma": 0.0},
     },
     "ideal_noise": {},
-    "monodis": _camera_detector(0.040, 0.30, 0.20, 12.0, 0.10, 1.10, 0.85),
-    "centernet": _camera_detector(0.037, 0.28, 0.20, 12.0, 0.11, 1.15, 0.85),
-    "km3d": _camera_detector(0.039, 0.29, 0.22, 10.0, 0.085, 1.15, 0.85),
-    "bevformer_small": _camera_detector(0.037, 0.28, 0.21, 9.0, 0.065, 0.35, 0.9),
+    "monodis": _camera_detector(0.0436, 0.327, 0.0882, 15.8, 0.132, 0.685, 0.85),
+    "centernet": _camera_detector(0.0393, 0.298, 0.0854, 13.3, 0.115, 0.714, 0.85),
+    "km3d": _camera_detector(0.0423, 0.314, 0.0977, 13.1, 0.111, 0.719, 0.85),
+    "bevformer_small": _camera_detector(0.0398, 0.301, 0.0914, 10.3, 0.074, 0.218, 0.9),
 }
 """Preset name → its ``[sensor]`` tables (values the scenario does not set)."""
 

@@ -62,14 +62,17 @@ def calibrate(preset: str, seeds: list[int], frames: int, visibility: bool, roun
     target = PUBLISHED[preset]
     keys = (("depth_sigma_per_m", "lateral_sigma_m"), ("size_sigma",), ("yaw_sigma_deg", "yaw_flip_probability"),
             ("velocity_sigma_mps",))
-    for round_ in range(rounds):
+    for round_ in range(rounds):  # the last round only measures
         values = [statistics.fmean(column) for column in zip(*measured(preset, seeds, frames, visibility, box3d),
                                                               strict=True)]
         print(f"round {round_}: " + "  ".join(f"{n} {v:.3f} ({t:.3f})" for n, v, t in zip(METRICS, values, target,
-                                                                                         strict=True)))
-        for names, value, goal in zip(keys, values, target, strict=True):
+                                                                                         strict=True)), flush=True)
+        if round_ == rounds - 1:
+            break
+        for names, value, goal, power in zip(keys, values, target, (1.2, 1.2, 0.8, 1.0), strict=True):
             for name in names:
-                box3d[name] = min(box3d[name] * (goal / value) ** 1.3, 0.45 if name == "yaw_flip_probability" else 1e9)
+                cap = 0.45 if name == "yaw_flip_probability" else 1e9
+                box3d[name] = min(box3d[name] * (goal / value) ** power, cap)
         print("  box3d =", {k: round(v, 4) for k, v in box3d.items() if isinstance(v, float)})
     return box3d
 
