@@ -60,7 +60,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "embedding": {"sigma": 0.0, "occlusion_sigma": 0.0},
     },
     "ideal_noise": {},
-    "monodis": _camera_detector(0.0436, 0.327, 0.0882, 15.8, 0.132, 0.685, 0.85),
+    "monodis": _camera_detector(0.0413, 0.310, 0.0822, 14.25, 0.119, 0.612, 0.85),
     "centernet": _camera_detector(0.0393, 0.298, 0.0854, 13.3, 0.115, 0.714, 0.85),
     "km3d": _camera_detector(0.0423, 0.314, 0.0977, 13.1, 0.111, 0.719, 0.85),
     "bevformer_small": _camera_detector(0.0398, 0.301, 0.0914, 10.3, 0.074, 0.218, 0.9),

@@ -68,6 +68,7 @@ class Embeddings:
         self.class_weights = weights / weights.sum()
         self._actors: dict[int, tuple[np.ndarray, int, np.ndarray]] = {}
         self._lookalike: dict[tuple[str, int], np.ndarray] = {}
+        self._appearance: dict[tuple[int, int], np.ndarray] = {}  # (actor id, side) → appearance
         self._generators: dict[int, np.random.Generator] = {}
         self.sigma = config.sigma if config.target_auc is None else self.solve_sigma(config.target_auc)
 
@@ -103,10 +104,13 @@ class Embeddings:
         """Noise-free unit appearance vectors ``(N, D)`` of actors seen from ``sides``."""
         d, v = self.config.dimension, self.config.viewpoint_weight
         out = np.empty((len(actor_ids), d))
-        for row, (actor_id, label, side) in enumerate(zip(actor_ids, labels, sides, strict=True)):
-            identity = self.identity(int(actor_id), str(label))
-            out[row] = identity if v == 0 else _unit(np.sqrt(1 - v) * identity + np.sqrt(v) * self._actor(
-                int(actor_id))[2][side])
+        for row, (actor_id, label, side) in enumerate(zip(actor_ids.tolist(), labels, sides.tolist(), strict=True)):
+            key = (actor_id, side)
+            if key not in self._appearance:
+                identity = self.identity(actor_id, str(label))
+                self._appearance[key] = identity if v == 0 else _unit(
+                    np.sqrt(1 - v) * identity + np.sqrt(v) * self._actor(actor_id)[2][side])
+            out[row] = self._appearance[key]
         return out
 
     # ------------------------------------------------------------------ calibration
