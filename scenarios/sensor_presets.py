@@ -34,9 +34,9 @@ def _camera_detector(depth_per_m: float, lateral: float, size: float, yaw_deg: f
         "box3d": {"depth_sigma_m": 0.15, "depth_sigma_per_m": depth_per_m, "lateral_sigma_m": lateral,
                   "size_sigma": size, "yaw_sigma_deg": yaw_deg, "yaw_flip_probability": flip,
                   "velocity_sigma_mps": velocity, "distance_scale_m": 40.0, "correlation_time_s": 0.8,
-                  "size_correlation_time_s": 2.0, "shared_fraction": 0.3, "yaw_flip_duration_s": 0.8},
-        "score": {"base": 0.3, "gain": 0.5, "sigma": 0.08, "error_gain": 0.3, "error_scale_m": 1.0,
-                  "distance_gain": 0.2, "distance_scale_m": 60.0},
+                  "size_correlation_time_s": 2.0, "shared_fraction": 0.3, "yaw_flip_duration_s": 0.4},
+        "score": {"base": 0.35, "gain": 0.55, "sigma": 0.08, "error_gain": 0.25, "error_scale_m": 1.0,
+                  "distance_gain": 0.15, "distance_scale_m": 60.0},
         "clutter": {"rate_per_frame": 0.3, "score_range": [0.05, 0.6]},
         "embedding": {"target_auc": 0.85, "occlusion_sigma": 0.8, "truncation_sigma": 0.3,
                       "distance_scale_m": 60.0, "lookalike_weight": 0.3, "viewpoint_weight": 0.3},
@@ -60,10 +60,10 @@ PRESETS: dict[str, dict[str, Any]] = {
         "embedding": {"sigma": 0.0, "occlusion_sigma": 0.0},
     },
     "ideal_noise": {},
-    "monodis": _camera_detector(0.0413, 0.310, 0.0822, 14.25, 0.119, 0.612, 0.85),
-    "centernet": _camera_detector(0.0393, 0.298, 0.0854, 13.3, 0.115, 0.714, 0.85),
-    "km3d": _camera_detector(0.0423, 0.314, 0.0977, 13.1, 0.111, 0.719, 0.85),
-    "bevformer_small": _camera_detector(0.0398, 0.301, 0.0914, 10.3, 0.074, 0.218, 0.9),
+    "monodis": _camera_detector(0.0391, 0.293, 0.0810, 23.8, 0.05, 0.613, 0.85),
+    "centernet": _camera_detector(0.0345, 0.261, 0.0784, 24.3, 0.055, 0.645, 0.85),
+    "km3d": _camera_detector(0.0375, 0.279, 0.0896, 19.1, 0.045, 0.648, 0.85),
+    "bevformer_small": _camera_detector(0.0347, 0.263, 0.0839, 15.7, 0.03, 0.200, 0.9),
 }
 """Preset name → its ``[sensor]`` tables (values the scenario does not set)."""
 

@@ -164,7 +164,7 @@ class EmbeddingConfig(Strict):
     dimension: Annotated[int, Field(ge=2, le=1024)] = 64
     """[-] embedding length."""
     sigma: NonNegativeFloat = 0.2
-    """[-] noise norm for an unoccluded object."""
+    """[-] noise norm for an unoccluded object (ignored when ``target_auc`` is set: then it is solved for)."""
     occlusion_sigma: NonNegativeFloat = 0.8
     """[-] noise norm added at full occlusion."""
     truncation_sigma: NonNegativeFloat = 0.0
@@ -179,12 +179,6 @@ class EmbeddingConfig(Strict):
     """[-] number of paint colours, drawn uniformly per vehicle."""
     viewpoint_weight: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.0
     """[-] share of an embedding that depends on the side seen (front, side, back)."""
-
-    @model_validator(mode="after")
-    def _check(self) -> EmbeddingConfig:
-        if self.target_auc is not None and "sigma" in self.model_fields_set:
-            raise ValueError("sigma: not a setting when target_auc is set (sigma is solved for)")
-        return self
 
 
 class GhostConfig(Strict):
