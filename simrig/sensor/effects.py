@@ -206,9 +206,10 @@ class Monocular3D(_Random):
         distance = np.linalg.norm(ray, axis=1)
         unit = ray / np.maximum(distance, 1e-9)[:, None]
         # Two directions across the ray: horizontal (world z × ray) and the one perpendicular to both.
-        across = np.cross(np.array([0.0, 0.0, 1.0]), unit)
-        across /= np.maximum(np.linalg.norm(across, axis=1), 1e-9)[:, None]
-        up = np.cross(unit, across)
+        horizontal = np.maximum(np.hypot(unit[:, 0], unit[:, 1]), 1e-9)
+        across = np.stack([-unit[:, 1] / horizontal, unit[:, 0] / horizontal, np.zeros(len(unit))], axis=1)
+        up = np.stack([-unit[:, 2] * across[:, 1], unit[:, 2] * across[:, 0],
+                       unit[:, 0] * across[:, 1] - unit[:, 1] * across[:, 0]], axis=1)
         growth = factor * (1.0 + distance / c.distance_scale_m if c.distance_scale_m else 1.0)
         depth = distance + errors[:, 0] * (c.depth_sigma_m + c.depth_sigma_per_m * distance) * factor
         lateral = errors[:, 1:3] * (c.lateral_sigma_m * growth)[:, None]
@@ -291,22 +292,31 @@ class Clutter(_Random):
         self.classes = np.array(list(class_mix), dtype=object)
         weights = np.array(list(class_mix.values()), dtype=float)
         self.weights = weights / weights.sum()
+        self.sizes = np.array([[CLASS_SPECS[ActorClass(name)].length, CLASS_SPECS[ActorClass(name)].width,
+                                CLASS_SPECS[ActorClass(name)].height] for name in self.classes]).reshape(-1, 3)
         self.dimension = embedding_dimension
+        self._none = (np.empty((0, 4)), np.empty((0, 9)), np.empty(0), np.empty(0, dtype=object),
+                      np.empty((0, embedding_dimension), dtype=np.float32))
 
     def apply(self, batch: CameraBatch) -> None:
         c = self.config
         rng = self.rng(batch.camera_index)
         count = int(rng.poisson(c.rate_per_frame))
+        if count == 0:  # an empty draw draws nothing more: the stream stays where it would be
+            batch.add_false_positives(*self._none, Cause.CLUTTER)
+            return
         camera = batch.camera
         height = np.exp(rng.uniform(*np.log(c.height_range_px), count))
         width = height * rng.uniform(*c.aspect_range, count)
         centre = np.stack([rng.uniform(0, camera.width, count), rng.uniform(0, camera.height, count)], axis=1)
-        labels = self.classes[rng.choice(len(self.classes), size=count, p=self.weights)]
+        kinds = rng.choice(len(self.classes), size=count, p=self.weights)
+        labels = self.classes[kinds]
         scores = rng.uniform(*c.score_range, count)
         ranges = rng.uniform(*c.depth_range_m, count)
         embeddings = _unit_rows(rng.standard_normal((count, self.dimension))).astype(np.float32)
         if batch.silenced:
-            count = 0
+            batch.add_false_positives(*self._none, Cause.CLUTTER)
+            return
         boxes = np.stack([
             np.clip(centre[:, 0] - width / 2, 0, camera.width), np.clip(centre[:, 1] - height / 2, 0, camera.height),
             np.clip(centre[:, 0] + width / 2, 0, camera.width), np.clip(centre[:, 1] + height / 2, 0, camera.height),
@@ -315,12 +325,9 @@ class Clutter(_Random):
                          np.ones(len(centre))], axis=1)
         rays /= np.linalg.norm(rays, axis=1, keepdims=True)
         points = rays * ranges[:, None] @ batch.world_from_camera[:3, :3].T + batch.world_from_camera[:3, 3]
-        sizes = np.array([[CLASS_SPECS[ActorClass(name)].length, CLASS_SPECS[ActorClass(name)].width,
-                           CLASS_SPECS[ActorClass(name)].height] for name in labels]).reshape(-1, 3)
-        boxes3d = np.concatenate([points, sizes, np.full((len(points), 1), batch.context.ego_yaw),
+        boxes3d = np.concatenate([points, self.sizes[kinds], np.full((len(points), 1), batch.context.ego_yaw),
                                   np.zeros((len(points), 2))], axis=1)
-        batch.add_false_positives(boxes[:count], boxes3d[:count], scores[:count], labels[:count],
-                                  embeddings[:count], Cause.CLUTTER)
+        batch.add_false_positives(boxes, boxes3d, scores, labels, embeddings, Cause.CLUTTER)
 
 
 class Duplicates(_Random):
