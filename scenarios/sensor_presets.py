@@ -60,8 +60,8 @@ PRESETS: dict[str, dict[str, Any]] = {
         "embedding": {"sigma": 0.0, "occlusion_sigma": 0.0},
     },
     "ideal_noise": {},
-    "monodis": _camera_detector(0.0391, 0.293, 0.0810, 23.8, 0.05, 0.613, 0.85),
-    "centernet": _camera_detector(0.0345, 0.261, 0.0784, 24.3, 0.055, 0.645, 0.85),
+    "monodis": _camera_detector(0.0391, 0.293, 0.0810, 22.5, 0.05, 0.613, 0.85),
+    "centernet": _camera_detector(0.0345, 0.261, 0.0784, 22.8, 0.055, 0.645, 0.85),
     "km3d": _camera_detector(0.0375, 0.279, 0.0896, 19.1, 0.045, 0.648, 0.85),
     "bevformer_small": _camera_detector(0.0347, 0.263, 0.0839, 15.7, 0.03, 0.200, 0.9),
 }
