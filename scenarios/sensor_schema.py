@@ -5,7 +5,7 @@ Each ``[sensor.*]`` table configures one sensor effect (:mod:`simrig.sensor.effe
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
@@ -43,6 +43,11 @@ class DetectionConfig(Strict):
     """[m] up to this distance from the camera p is not lowered."""
     max_range_m: PositiveFloat = 100.0
     """[m] at or beyond this distance an object is never detected."""
+    burst_fraction: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.0
+    """[-] Gilbert–Elliott miss process: long-run fraction of frames an (actor, camera) pair spends in the
+    bad state, where it is never detected (cause ``burst``). 0 switches the process off."""
+    burst_mean_s: PositiveFloat = 0.5
+    """[s] mean length of one stay in the bad state (a miss burst); the same in seconds at any frame rate."""
 
     @model_validator(mode="after")
     def _check(self) -> DetectionConfig:
@@ -65,7 +70,14 @@ class Box2DNoiseConfig(Strict):
 
 
 class Box3DNoiseConfig(Strict):
-    """The monocular 3D estimate in the world frame, built in the camera's frame from the true box."""
+    """The monocular 3D estimate in the world frame, built in the camera's frame from the true box.
+
+    Every error is a stationary Ornstein–Uhlenbeck process per (actor, camera): sampled every frame
+    period Δt it is AR(1) with lag-1 correlation φ = exp(−Δt / τ), so the correlation time τ [s] (not the
+    lag-1 correlation) is what a frame-rate change keeps. The σ below are the processes' stationary
+    standard deviations. ``shared_fraction`` of each error's variance is common to all cameras of one
+    actor (a per-actor process with the same τ). Errors other than depth grow with the range d [m]
+    from the camera: σ(d) = σ · (1 + d / ``distance_scale_m``)."""
 
     depth_sigma_m: NonNegativeFloat = 0.2
     """[m] a in σ(d) = a + b·d: error of the range d from the camera to the box centre, along the ray."""
@@ -81,10 +93,23 @@ class Box3DNoiseConfig(Strict):
     """[-] probability that the estimate faces backwards (yaw + 180°)."""
     velocity_sigma_mps: NonNegativeFloat = 0.5
     """[m/s] σ of each velocity component's error."""
+    distance_scale_m: PositiveFloat | None = None
+    """[m] D in σ(d) = σ · (1 + d / D) for the lateral, size, yaw and velocity errors; omitted: no growth."""
+    correlation_time_s: NonNegativeFloat = 0.0
+    """[s] τ of the depth, lateral, yaw and velocity errors; 0: a fresh error every frame (white)."""
+    size_correlation_time_s: NonNegativeFloat = 0.0
+    """[s] τ of the size errors (a monocular detector's size guess persists); 0: white."""
+    shared_fraction: Fraction = 0.0
+    """[-] share of each error's variance common to every camera that sees the actor."""
+    yaw_flip_duration_s: NonNegativeFloat = 0.0
+    """[s] mean length of a yaw flip (a two-state Markov chain with stationary flip probability
+    ``yaw_flip_probability``); 0: flips are drawn afresh every frame."""
 
 
 class ScoreConfig(Strict):
-    """Confidence: clip(base + gain · q + N(0, σ²), floor, 1) with q = (1 − occlusion) · (1 − truncation)."""
+    """Confidence: clip(base + gain · q − error_gain · (1 − exp(−e / error_scale_m)) − distance_gain ·
+    min(1, d / distance_scale_m) + N(0, σ²), floor, 1) with q = (1 − occlusion) · (1 − truncation), e the
+    bird's-eye-view centre error of the detection's 3D estimate [m] and d its true range from the camera [m]."""
 
     base: Fraction = 0.35
     """[-] score of an object seen with q = 0."""
@@ -94,6 +119,14 @@ class ScoreConfig(Strict):
     """[-] σ of the score noise."""
     floor: Fraction = 0.01
     """[-] lowest score reported."""
+    error_gain: Fraction = 0.0
+    """[-] score lost by a detection whose centre is far off (e ≫ error_scale_m)."""
+    error_scale_m: PositiveFloat = 1.0
+    """[m] centre error at which 63% of ``error_gain`` is lost."""
+    distance_gain: Fraction = 0.0
+    """[-] score lost at and beyond ``distance_scale_m``, linearly in the range."""
+    distance_scale_m: PositiveFloat = 60.0
+    """[m] range at which the whole ``distance_gain`` is lost."""
 
 
 class ClutterConfig(Strict):
@@ -120,26 +153,128 @@ class ClutterConfig(Strict):
 
 
 class EmbeddingConfig(Strict):
-    """Appearance embeddings: a fixed random unit vector per identity, plus noise growing with occlusion,
-    renormalised. The noise vector has norm ≈ σ = sigma + occlusion_sigma · occlusion."""
+    """Appearance embeddings (re-ID features): per identity a fixed unit vector, mixed with a vector shared
+    by every vehicle of its class and colour (``lookalike_weight``) and with a view vector per side (front,
+    side, back) it is seen from (``viewpoint_weight``); plus noise, renormalised. The noise vector has norm
+    ≈ σ = (sigma + occlusion_sigma · occlusion + truncation_sigma · truncation) · (1 + d / distance_scale_m).
+
+    With ``target_auc`` set, ``sigma`` is not a setting but solved for: the ROC AUC of cosine distance
+    separating same-identity from different-identity pairs of unoccluded, untruncated observations from
+    the same side at d → 0 is ``target_auc`` (traffic's class mix, ``colours`` colours)."""
 
     dimension: Annotated[int, Field(ge=2, le=1024)] = 64
     """[-] embedding length."""
     sigma: NonNegativeFloat = 0.2
-    """[-] noise norm for an unoccluded object."""
+    """[-] noise norm for an unoccluded object (ignored when ``target_auc`` is set: then it is solved for)."""
     occlusion_sigma: NonNegativeFloat = 0.8
     """[-] noise norm added at full occlusion."""
+    truncation_sigma: NonNegativeFloat = 0.0
+    """[-] noise norm added at full truncation."""
+    distance_scale_m: PositiveFloat | None = None
+    """[m] D in the noise's growth factor 1 + d / D; omitted: no growth with range."""
+    target_auc: Annotated[float, Field(gt=0.5, le=1, allow_inf_nan=False)] | None = None
+    """[-] ROC AUC of same- vs different-identity cosine distance at the reference condition; (0.5, 1]."""
+    lookalike_weight: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.0
+    """[-] share of an identity vector common to its class and colour (their cosine similarity)."""
+    colours: Annotated[int, Field(ge=1, le=1000)] = 8
+    """[-] number of paint colours, drawn uniformly per vehicle."""
+    viewpoint_weight: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.0
+    """[-] share of an embedding that depends on the side seen (front, side, back)."""
+
+
+class GhostConfig(Strict):
+    """False positives with a life: ghost objects born in the world (a Poisson process in time), each
+    living an exponential time, either static (fixed position, zero velocity) or shadowing a real vehicle
+    (a reflection, a split truck: a fixed offset from it, its velocity, dying with it). One 3D box per
+    ghost, projected into every camera that sees it; each such camera reports it with ``probability``
+    per frame; scores are Beta-distributed with the given mean and concentration."""
+
+    birth_rate_hz: NonNegativeFloat = 0.0
+    """[1/s] ghosts born per second (0: no ghosts)."""
+    mean_life_s: PositiveFloat = 1.0
+    """[s] mean life of a ghost."""
+    shadow_fraction: Fraction = 0.5
+    """[-] share of ghosts that shadow a real vehicle (the rest are static)."""
+    range_m: tuple[NonNegativeFloat, PositiveFloat] = (5.0, 50.0)
+    """[m] static ghosts are born uniformly on the ground in this ring around the ego; shadowed vehicles
+    are chosen among those within it."""
+    shadow_offset_m: tuple[FiniteFloat, FiniteFloat] = (1.0, 6.0)
+    """[m] a shadow ghost sits behind (or ahead of) its vehicle by a distance uniform in this range."""
+    probability: Fraction = 0.9
+    """[-] per frame and camera that sees it, probability that the ghost is reported."""
+    score_mean: Annotated[float, Field(gt=0, lt=1, allow_inf_nan=False)] = 0.5
+    """[-] mean of the Beta score distribution."""
+    score_concentration: PositiveFloat = 10.0
+    """[-] α + β of the Beta score distribution."""
+
+    @model_validator(mode="after")
+    def _check(self) -> GhostConfig:
+        for name in ("range_m", "shadow_offset_m"):
+            low, high = getattr(self, name)
+            if low > high:
+                raise ValueError(f"{name}: lower bound {low} exceeds upper bound {high}")
+        return self
+
+
+class DuplicateConfig(Strict):
+    """Failed non-maximum suppression: a detected object gets a second box in the same camera with the
+    given probability, its pixel box shifted and scaled by N(0, relative_sigma²) of its size, its 3D centre
+    moved by N(0, offset_sigma_m²), its score multiplied by ``score_factor``."""
+
+    probability: Fraction = 0.0
+    """[-] per detection, probability of a duplicate."""
+    relative_sigma: NonNegativeFloat = 0.15
+    """[-] σ of the duplicate's box edges as a fraction of the box size."""
+    offset_sigma_m: NonNegativeFloat = 0.5
+    """[m] σ of the duplicate's 3D centre offset per horizontal axis."""
+    score_factor: Fraction = 0.6
+    """[-] the duplicate's score relative to the detection's."""
+
+
+class ConfusionConfig(Strict):
+    """Class confusion: ``matrix[true][reported]`` is the probability that a detection of a ``true`` object
+    is labelled ``reported``; each given row must sum to 1; classes without a row are never confused."""
+
+    matrix: dict[Literal["car", "truck", "bus", "motorcycle"],
+                 dict[Literal["car", "truck", "bus", "motorcycle"], Fraction]] = Field(default_factory=dict)
+    """[-] row-stochastic confusion matrix over the classes."""
+
+    @model_validator(mode="after")
+    def _check(self) -> ConfusionConfig:
+        for true, row in self.matrix.items():
+            total = sum(row.values())
+            if abs(total - 1.0) > 1e-6:
+                raise ValueError(f"matrix: row {true!r} sums to {total:g}, not 1 (a row must be a distribution)")
+        return self
 
 
 class SensorConfig(Strict):
-    """The detector model of every camera (one table per effect)."""
+    """The detector model of every camera (one table per effect). ``preset`` names a calibrated detector
+    (:mod:`.sensor_presets`); the scenario's own keys override the preset's key by key."""
 
+    preset: str | None = None
+    """Detector preset: perfect, ideal_noise (the defaults), monodis, centernet, km3d, bevformer_small."""
     detection: DetectionConfig = Field(default_factory=DetectionConfig)
     box2d: Box2DNoiseConfig = Field(default_factory=Box2DNoiseConfig)
     box3d: Box3DNoiseConfig = Field(default_factory=Box3DNoiseConfig)
     score: ScoreConfig = Field(default_factory=ScoreConfig)
     clutter: ClutterConfig = Field(default_factory=ClutterConfig)
     embedding: EmbeddingConfig = Field(default_factory=EmbeddingConfig)
+    ghosts: GhostConfig = Field(default_factory=GhostConfig)
+    duplicates: DuplicateConfig = Field(default_factory=DuplicateConfig)
+    confusion: ConfusionConfig = Field(default_factory=ConfusionConfig)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _apply_preset(cls, data):
+        if not isinstance(data, dict) or data.get("preset") is None:
+            return data
+        from .sensor_presets import PRESETS, merge_tables
+
+        name = data["preset"]
+        if name not in PRESETS:
+            raise ValueError(f"preset: unknown detector preset {name!r}; known: {', '.join(PRESETS)}")
+        return merge_tables(PRESETS[name], data)
 
 
 __all__ = ["FiniteFloat", "RenderConfig", "SensorConfig"]

@@ -36,6 +36,14 @@ class Cause(enum.IntFlag):
     """Its noise was scaled up by a ``noise`` perturbation."""
     CLUTTER = enum.auto()
     """A false positive: no actor behind it."""
+    BURST = enum.auto()
+    """The detector's miss process was in its bad state (a Gilbert–Elliott miss burst)."""
+    GHOST = enum.auto()
+    """A false positive from a ghost object with a life of its own (static, or shadowing a vehicle)."""
+    DUPLICATE = enum.auto()
+    """A false positive: a second box on an object already detected in the same camera (failed NMS)."""
+    CONFUSED = enum.auto()
+    """Detected, but reported with another class (class confusion)."""
 
 
 CAUSE_NAMES: tuple[str, ...] = tuple(cause.name.lower() for cause in Cause)

@@ -481,6 +481,9 @@ def build_parser() -> argparse.ArgumentParser:
                           "SensorFrame.images")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(run=_cmd_run)
+    from .detector.cli import add_detector_command
+
+    add_detector_command(commands)
     return parser
 
 

@@ -22,7 +22,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "trackers": ("simrig.trackers",),
     "making data": ("simrig.world", "simrig.render", "simrig.sensor"),
     "storage": ("simrig.dataset", "simrig.export"),
-    "judging": ("simrig.scoring",),
+    "judging": ("simrig.scoring", "simrig.detector"),
     "pipeline": ("simrig.pipeline",),
     "orchestration": ("simrig.benchmark", "simrig.search", "simrig.testing"),
     "faces": ("simrig.report", "simrig.figures", "simrig.cli", "simrig.api", "simrig.__main__", "simrig"),
@@ -46,7 +46,8 @@ def layer_of(module: str) -> str | None:
     best = None
     for layer, prefixes in LAYERS.items():
         for prefix in prefixes:
-            if (module == prefix or module.startswith(prefix + ".")) and (best is None or len(prefix) > best[1]):
+            inside = module == prefix or (module.startswith(prefix + ".") and prefix != "simrig")  # no catch-all
+            if inside and (best is None or len(prefix) > best[1]):
                 best = (layer, len(prefix))
     return best[0] if best else None
 

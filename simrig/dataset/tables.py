@@ -150,7 +150,7 @@ def sensor_columns(frame: int, timestamp: float, sensor: SensorOutput) -> dict[s
         detections["index"].append(index[order])
         detections["box2d"].append(np.concatenate([batch.det_boxes2d[hit], clutter["boxes2d"]])[order])
         detections["score"].append(np.concatenate([batch.scores[hit], clutter["scores"]])[order])
-        detections["label"].append(np.concatenate([batch.classes[hit], clutter["labels"]]).astype(object)[order])
+        detections["label"].append(np.concatenate([batch.labels[hit], clutter["labels"]]).astype(object)[order])
         detections["box3d"].append(np.concatenate([batch.det_boxes3d[hit], clutter["boxes3d"]])[order])
         detections["embedding"].append(np.concatenate([batch.embeddings[hit], clutter["embeddings"]])[order])
         n = len(batch)
@@ -158,7 +158,7 @@ def sensor_columns(frame: int, timestamp: float, sensor: SensorOutput) -> dict[s
         truth["actor_id"].append(np.concatenate([batch.actor_ids, np.full(k, -1, dtype=np.int64)]))
         truth["detection"].append(np.concatenate([batch.detection_index, batch.clutter_index]))
         truth["probability"].append(np.concatenate([batch.probability, np.zeros(k)]))
-        truth["causes"].append(np.concatenate([batch.causes, np.full(k, int(Cause.CLUTTER), dtype=np.int64)]))
+        truth["causes"].append(np.concatenate([batch.causes, clutter.get("causes", np.full(k, int(Cause.CLUTTER)))]))
     joined = {key: np.concatenate(value) for key, value in detections.items()}
     d = len(joined["index"])
     embeddings = joined["embedding"].astype(np.float32)

@@ -32,8 +32,9 @@ class CameraBatch:
     Effects then set ``probability`` (of a detection), ``causes`` (:class:`~.causes.Cause` bit masks),
     ``noise_factor`` and ``yaw_offset`` [rad], ``silenced`` (no output at all, not even clutter), draw
     ``detected`` and fill the outputs of detected actors: ``det_boxes2d``, ``det_boxes3d``, ``scores``,
-    ``embeddings``, plus the clutter arrays; last, each detection's position in the camera's list
-    (``detection_index``, −1 for a miss; ``clutter_index``).
+    ``embeddings`` and ``labels`` (the class reported; the true class unless confused), plus the false
+    positives (``clutter``: clutter, ghosts and duplicates, each row with its ``causes``); last, each
+    detection's position in the camera's list (``detection_index``, −1 for a miss; ``clutter_index``).
     """
 
     context: FrameContext
@@ -57,6 +58,8 @@ class CameraBatch:
     det_boxes3d: np.ndarray = None
     scores: np.ndarray = None
     embeddings: np.ndarray = None
+    labels: np.ndarray = None
+    ghost_ids: np.ndarray = None
     clutter: dict[str, np.ndarray] = field(default_factory=dict)
     detection_index: np.ndarray = None
     clutter_index: np.ndarray = None
@@ -70,6 +73,22 @@ class CameraBatch:
         self.det_boxes2d = np.full((n, 4), np.nan)
         self.det_boxes3d = np.full((n, 9), np.nan)
         self.scores = np.full(n, np.nan)
+        self.labels = self.classes
+
+    def add_false_positives(self, boxes2d: np.ndarray, boxes3d: np.ndarray, scores: np.ndarray,
+                            labels: np.ndarray, embeddings: np.ndarray, cause: int) -> None:
+        """Append false positives (pixel boxes ``(K, 4)``, world boxes ``(K, 9)``, scores, labels, unit
+        embeddings ``(K, D)``) with one :class:`~simrig.causes.Cause` bit mask for all of them."""
+        k = len(scores)
+        new = {"boxes2d": np.asarray(boxes2d, dtype=float).reshape(k, 4),
+               "boxes3d": np.asarray(boxes3d, dtype=float).reshape(k, 9),
+               "scores": np.asarray(scores, dtype=float), "labels": np.asarray(labels, dtype=object),
+               "embeddings": np.asarray(embeddings, dtype=np.float32),
+               "causes": np.full(k, int(cause), dtype=np.int64)}
+        if not self.clutter:
+            self.clutter = new
+            return
+        self.clutter = {key: np.concatenate([self.clutter[key], value]) for key, value in new.items()}
 
     @property
     def actor_ids(self) -> np.ndarray:

@@ -14,9 +14,11 @@ from typing import Protocol
 import numpy as np
 
 from simrig.scenarios.sensor_schema import (
+    Box3DNoiseConfig,
     ClutterConfig,
+    ConfusionConfig,
     DetectionConfig,
-    EmbeddingConfig,
+    DuplicateConfig,
 )
 
 from ..causes import Cause
@@ -24,6 +26,10 @@ from ..classes import CLASS_SPECS
 from ..seeding import RandomStreams
 from ..types import ActorClass
 from .batch import CameraBatch
+from .processes import GaussMarkov, TwoStateMarkov, ar1_coefficient
+
+SHARED = 999
+"""Sub-stream number of a process shared by all cameras (camera indices are below it)."""
 
 
 class SensorEffect(Protocol):
@@ -86,7 +92,30 @@ class DetectionDraw(_Random):
 
     def apply(self, batch: CameraBatch) -> None:
         draws = self.rng(batch.camera_index).random(len(batch))
-        batch.detected = (draws < batch.probability) & ~batch.silenced
+        batch.detected = (draws < batch.probability) & (not batch.silenced)
+
+
+class MissBursts(_Random):
+    """Gilbert–Elliott misses: a two-state chain per (actor, camera) (:class:`.processes.TwoStateMarkov`,
+    one uniform draw per actor and frame); in the bad state p = 0 for an actor in view, cause ``burst``."""
+
+    stream_key = 7
+
+    def __init__(self, streams: RandomStreams, config: DetectionConfig, period_s: float):
+        super().__init__(streams, config)
+        self.period_s = period_s
+        self._chains: dict[int, TwoStateMarkov] = {}
+
+    def apply(self, batch: CameraBatch) -> None:
+        c = self.config
+        if c.burst_fraction <= 0:
+            return
+        chain = self._chains.setdefault(batch.camera_index,
+                                        TwoStateMarkov(c.burst_fraction, c.burst_mean_s, self.period_s))
+        bad = chain.step(batch.actor_ids, self.rng(batch.camera_index).random(len(batch)))
+        hit = bad & batch.in_view
+        batch.probability = np.where(hit, 0.0, batch.probability)
+        batch.causes |= np.where(hit, int(Cause.BURST), 0)
 
 
 class Box2DNoise(_Random):
@@ -114,22 +143,61 @@ def _wrap(angle: np.ndarray) -> np.ndarray:
 
 class Monocular3D(_Random):
     """A monocular 3D estimate in the world frame. In the camera frame the box centre moves along its ray
-    by N(0, σ(d)²), σ(d) = a + b·d with d its range [m], and across the ray by N(0, σ_lat²) in two
-    directions; sizes are scaled by 1 + N(0, σ_s²); yaw gets N(0, σ_yaw²) and flips by 180° with the
-    configured probability; velocity gets N(0, σ_v²) per component. All σ are multiplied by the actor's
-    noise factor. A calibration yaw offset then rotates centre, yaw and velocity about the vertical axis
-    through the camera (the detector lifts to the world with the wrong extrinsics)."""
+    by e_d · σ_d(d), σ_d(d) = a + b·d with d its range [m], and across the ray by e_l · σ_l(d) in two
+    directions; sizes are scaled by 1 + e_s · σ_s(d); yaw gets e_y · σ_yaw(d) and flips by 180° while a
+    two-state flip chain is on; velocity gets e_v · σ_v(d) per component. Every e is a unit-variance
+    Ornstein–Uhlenbeck process per (actor, camera) (:class:`.processes.GaussMarkov`), optionally mixed
+    with a per-actor one shared by all cameras; σ(d) = σ · (1 + d / D) for the errors other than depth
+    (:class:`~scenarios.sensor_schema.Box3DNoiseConfig`). All σ are multiplied by the actor's noise factor.
+    A calibration yaw offset then rotates centre, yaw and velocity about the vertical axis through the
+    camera (the detector lifts to the world with the wrong extrinsics)."""
 
     stream_key = 2
+    WIDTH = 9  # depth, lateral ×2, size ×3, yaw, velocity ×2
 
-    def apply(self, batch: CameraBatch) -> None:
+    def __init__(self, streams: RandomStreams, config: Box3DNoiseConfig, period_s: float = 0.1):
+        super().__init__(streams, config)
+        self.period_s = period_s
+        phi, phi_size = (ar1_coefficient(period_s, t) for t in (config.correlation_time_s,
+                                                                 config.size_correlation_time_s))
+        self._phi = np.array([phi, phi, phi, phi_size, phi_size, phi_size, phi, phi, phi])
+        self._errors: dict[int, GaussMarkov] = {}
+        self._flips: dict[int, TwoStateMarkov] = {}
+        self._shared = GaussMarkov(self._phi)
+        self._shared_frame: int | None = None
+        self._shared_values: np.ndarray | None = None
+
+    def _shared_errors(self, batch: CameraBatch) -> np.ndarray:
+        """The per-actor process common to all cameras, advanced once per frame (its own sub-stream)."""
+        if self._shared_frame != batch.context.frame:
+            z = self.rng(SHARED).standard_normal((len(batch), self.WIDTH))
+            self._shared_values = self._shared.step(batch.actor_ids, z)
+            self._shared_frame = batch.context.frame
+        return self._shared_values
+
+    def errors(self, batch: CameraBatch) -> tuple[np.ndarray, np.ndarray]:
+        """Unit-variance errors ``(N, 9)`` and the flip states ``(N,)`` of this camera's actors at this frame."""
         c = self.config
         n = len(batch)
         rng = self.rng(batch.camera_index)
-        depth_noise, lateral_noise = rng.standard_normal(n), rng.standard_normal((n, 2))
-        size_noise, yaw_noise = rng.standard_normal((n, 3)), rng.standard_normal(n)
-        velocity_noise = rng.standard_normal((n, 2))
-        flips = rng.random(n) < c.yaw_flip_probability
+        z = np.concatenate([rng.standard_normal((n, 1)), rng.standard_normal((n, 2)), rng.standard_normal((n, 3)),
+                            rng.standard_normal((n, 1)), rng.standard_normal((n, 2))], axis=1)
+        u = rng.random(n)
+        process = self._errors.setdefault(batch.camera_index, GaussMarkov(self._phi))
+        errors = process.step(batch.actor_ids, z)
+        if c.shared_fraction > 0:
+            errors = np.sqrt(1.0 - c.shared_fraction) * errors + np.sqrt(c.shared_fraction) * self._shared_errors(batch)
+        if c.yaw_flip_duration_s > 0:
+            chain = self._flips.setdefault(batch.camera_index, TwoStateMarkov(
+                c.yaw_flip_probability, c.yaw_flip_duration_s, self.period_s))
+            flips = chain.step(batch.actor_ids, u)
+        else:
+            flips = u < c.yaw_flip_probability
+        return errors, flips
+
+    def apply(self, batch: CameraBatch) -> None:
+        c = self.config
+        errors, flips = self.errors(batch)
         factor = batch.noise_factor
         world_from_camera = batch.world_from_camera
         camera_centre = world_from_camera[:3, 3]
@@ -138,17 +206,19 @@ class Monocular3D(_Random):
         distance = np.linalg.norm(ray, axis=1)
         unit = ray / np.maximum(distance, 1e-9)[:, None]
         # Two directions across the ray: horizontal (world z × ray) and the one perpendicular to both.
-        across = np.cross(np.array([0.0, 0.0, 1.0]), unit)
-        across /= np.maximum(np.linalg.norm(across, axis=1), 1e-9)[:, None]
-        up = np.cross(unit, across)
-        depth = distance + depth_noise * (c.depth_sigma_m + c.depth_sigma_per_m * distance) * factor
-        lateral = lateral_noise * c.lateral_sigma_m * factor[:, None]
+        horizontal = np.maximum(np.hypot(unit[:, 0], unit[:, 1]), 1e-9)
+        across = np.stack([-unit[:, 1] / horizontal, unit[:, 0] / horizontal, np.zeros(len(unit))], axis=1)
+        up = np.stack([-unit[:, 2] * across[:, 1], unit[:, 2] * across[:, 0],
+                       unit[:, 0] * across[:, 1] - unit[:, 1] * across[:, 0]], axis=1)
+        growth = factor * (1.0 + distance / c.distance_scale_m if c.distance_scale_m else 1.0)
+        depth = distance + errors[:, 0] * (c.depth_sigma_m + c.depth_sigma_per_m * distance) * factor
+        lateral = errors[:, 1:3] * (c.lateral_sigma_m * growth)[:, None]
         centre = camera_centre + unit * depth[:, None] + across * lateral[:, :1] + up * lateral[:, 1:]
         out = np.empty_like(true)
         out[:, :3] = centre
-        out[:, 3:6] = true[:, 3:6] * np.maximum(0.1, 1.0 + size_noise * c.size_sigma * factor[:, None])
-        out[:, 6] = true[:, 6] + yaw_noise * np.radians(c.yaw_sigma_deg) * factor + np.where(flips, np.pi, 0.0)
-        out[:, 7:9] = true[:, 7:9] + velocity_noise * c.velocity_sigma_mps * factor[:, None]
+        out[:, 3:6] = true[:, 3:6] * np.maximum(0.1, 1.0 + errors[:, 3:6] * (c.size_sigma * growth)[:, None])
+        out[:, 6] = true[:, 6] + errors[:, 6] * np.radians(c.yaw_sigma_deg) * growth + np.where(flips, np.pi, 0.0)
+        out[:, 7:9] = true[:, 7:9] + errors[:, 7:9] * (c.velocity_sigma_mps * growth)[:, None]
         if batch.yaw_offset:
             cos, sin = np.cos(batch.yaw_offset), np.sin(batch.yaw_offset)
             rotation = np.array([[cos, -sin], [sin, cos]])
@@ -160,7 +230,9 @@ class Monocular3D(_Random):
 
 
 class Scores(_Random):
-    """score = clip(base + gain · q + N(0, σ²), floor, 1), q = visible fraction · (1 − truncation)."""
+    """score = clip(base + gain · q − error_gain · (1 − exp(−e / error_scale)) − distance_gain ·
+    min(1, d / distance_scale) + N(0, σ²), floor, 1); q = visible fraction · (1 − truncation), e the
+    bird's-eye-view centre error of the 3D estimate [m], d the range from the camera [m]."""
 
     stream_key = 3
 
@@ -168,40 +240,43 @@ class Scores(_Random):
         c = self.config
         quality = batch.visible_fraction * (1.0 - np.nan_to_num(batch.truncation, nan=1.0))
         noise = self.rng(batch.camera_index).standard_normal(len(batch)) * c.sigma
-        scores = np.clip(c.base + c.gain * quality + noise, c.floor, 1.0)
-        batch.scores = np.where(batch.detected, scores, np.nan)
+        score = c.base + c.gain * quality + noise
+        if c.error_gain:
+            error = np.nan_to_num(np.hypot(*(batch.det_boxes3d[:, :2] - batch.boxes3d[:, :2]).T))
+            score -= c.error_gain * (1.0 - np.exp(-error / c.error_scale_m))
+        if c.distance_gain:
+            score -= c.distance_gain * np.minimum(1.0, batch.distance / c.distance_scale_m)
+        batch.scores = np.where(batch.detected, np.clip(score, c.floor, 1.0), np.nan)
 
 
 def _unit_rows(vectors: np.ndarray) -> np.ndarray:
     return vectors / np.maximum(np.linalg.norm(vectors, axis=-1, keepdims=True), 1e-12)
 
 
-class Embeddings(_Random):
-    """Appearance: identity vector (a fixed random unit vector per actor id, from the ``embeddings``
-    stream) plus a Gaussian vector of norm ≈ σ = (sigma + occlusion_sigma · occlusion) · noise factor,
-    renormalised. float32, ``dimension`` long."""
+class Confusion(_Random):
+    """Class confusion: each detected actor's reported label is drawn from its true class's row of the
+    confusion matrix (one uniform draw per actor, always); a changed label adds cause ``confused``."""
 
-    stream_key = 4
+    stream_key = 8
 
-    def __init__(self, streams: RandomStreams, config: EmbeddingConfig):
+    def __init__(self, streams: RandomStreams, config: ConfusionConfig):
         super().__init__(streams, config)
-        self._identity: dict[int, np.ndarray] = {}
-
-    def identity(self, actor_id: int) -> np.ndarray:
-        """The noise-free unit embedding of ``actor_id`` (same for every camera and frame)."""
-        if actor_id not in self._identity:
-            vector = self._streams.generator("embeddings", int(actor_id)).standard_normal(self.config.dimension)
-            self._identity[actor_id] = _unit_rows(vector)
-        return self._identity[actor_id]
+        self.rows = {true: (np.array(list(row), dtype=object), np.cumsum(list(row.values())))
+                     for true, row in config.matrix.items()}
 
     def apply(self, batch: CameraBatch) -> None:
-        c = self.config
-        n, d = len(batch), c.dimension
-        noise = self.rng(batch.camera_index).standard_normal((n, d)) / np.sqrt(d)
-        sigma = (c.sigma + c.occlusion_sigma * (1.0 - batch.visible_fraction)) * batch.noise_factor
-        identity = np.array([self.identity(i) for i in batch.actor_ids]).reshape(n, d)
-        embeddings = _unit_rows(identity + noise * sigma[:, None]).astype(np.float32)
-        batch.embeddings = np.where(batch.detected[:, None], embeddings, np.float32(np.nan))
+        if not self.rows:
+            return
+        u = self.rng(batch.camera_index).random(len(batch))
+        labels = np.array(batch.classes, dtype=object)
+        for true, (names, cumulative) in self.rows.items():
+            mine = batch.classes == true
+            if mine.any():
+                pick = np.minimum(np.searchsorted(cumulative, u[mine] * cumulative[-1], side="right"), len(names) - 1)
+                labels[mine] = names[pick]
+        confused = batch.detected & (labels != batch.classes)
+        batch.labels = labels
+        batch.causes |= np.where(confused, int(Cause.CONFUSED), 0)
 
 
 class Clutter(_Random):
@@ -217,22 +292,31 @@ class Clutter(_Random):
         self.classes = np.array(list(class_mix), dtype=object)
         weights = np.array(list(class_mix.values()), dtype=float)
         self.weights = weights / weights.sum()
+        self.sizes = np.array([[CLASS_SPECS[ActorClass(name)].length, CLASS_SPECS[ActorClass(name)].width,
+                                CLASS_SPECS[ActorClass(name)].height] for name in self.classes]).reshape(-1, 3)
         self.dimension = embedding_dimension
+        self._none = (np.empty((0, 4)), np.empty((0, 9)), np.empty(0), np.empty(0, dtype=object),
+                      np.empty((0, embedding_dimension), dtype=np.float32))
 
     def apply(self, batch: CameraBatch) -> None:
         c = self.config
         rng = self.rng(batch.camera_index)
         count = int(rng.poisson(c.rate_per_frame))
+        if count == 0:  # an empty draw draws nothing more: the stream stays where it would be
+            batch.add_false_positives(*self._none, Cause.CLUTTER)
+            return
         camera = batch.camera
         height = np.exp(rng.uniform(*np.log(c.height_range_px), count))
         width = height * rng.uniform(*c.aspect_range, count)
         centre = np.stack([rng.uniform(0, camera.width, count), rng.uniform(0, camera.height, count)], axis=1)
-        labels = self.classes[rng.choice(len(self.classes), size=count, p=self.weights)]
+        kinds = rng.choice(len(self.classes), size=count, p=self.weights)
+        labels = self.classes[kinds]
         scores = rng.uniform(*c.score_range, count)
         ranges = rng.uniform(*c.depth_range_m, count)
         embeddings = _unit_rows(rng.standard_normal((count, self.dimension))).astype(np.float32)
         if batch.silenced:
-            count = 0
+            batch.add_false_positives(*self._none, Cause.CLUTTER)
+            return
         boxes = np.stack([
             np.clip(centre[:, 0] - width / 2, 0, camera.width), np.clip(centre[:, 1] - height / 2, 0, camera.height),
             np.clip(centre[:, 0] + width / 2, 0, camera.width), np.clip(centre[:, 1] + height / 2, 0, camera.height),
@@ -241,14 +325,41 @@ class Clutter(_Random):
                          np.ones(len(centre))], axis=1)
         rays /= np.linalg.norm(rays, axis=1, keepdims=True)
         points = rays * ranges[:, None] @ batch.world_from_camera[:3, :3].T + batch.world_from_camera[:3, 3]
-        sizes = np.array([[CLASS_SPECS[ActorClass(name)].length, CLASS_SPECS[ActorClass(name)].width,
-                           CLASS_SPECS[ActorClass(name)].height] for name in labels]).reshape(-1, 3)
-        boxes3d = np.concatenate([points, sizes, np.full((len(points), 1), batch.context.ego_yaw),
+        boxes3d = np.concatenate([points, self.sizes[kinds], np.full((len(points), 1), batch.context.ego_yaw),
                                   np.zeros((len(points), 2))], axis=1)
-        batch.clutter = {
-            "boxes2d": boxes[:count], "boxes3d": boxes3d[:count], "scores": scores[:count],
-            "labels": labels[:count], "embeddings": embeddings[:count],
-        }
+        batch.add_false_positives(boxes, boxes3d, scores, labels, embeddings, Cause.CLUTTER)
+
+
+class Duplicates(_Random):
+    """Failed NMS: with the configured probability a detected actor gets a second box in the same camera,
+    its edges moved by N(0, (k · size)²), its 3D centre by N(0, σ²) per horizontal axis, its score scaled,
+    its label and embedding the detection's; cause ``duplicate``. Draws a fixed number per actor."""
+
+    stream_key = 9
+
+    def __init__(self, streams: RandomStreams, config: DuplicateConfig):
+        super().__init__(streams, config)
+
+    def apply(self, batch: CameraBatch) -> None:
+        c = self.config
+        if c.probability <= 0:
+            return
+        rng = self.rng(batch.camera_index)
+        n = len(batch)
+        u, edges, offsets = rng.random(n), rng.standard_normal((n, 4)), rng.standard_normal((n, 2))
+        hit = batch.detected & (u < c.probability)
+        if not hit.any():
+            return
+        boxes = batch.det_boxes2d[hit]
+        size = np.stack([boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1]], axis=1)[:, [0, 1, 0, 1]]
+        moved = boxes + edges[hit] * c.relative_sigma * size
+        x = np.sort(moved[:, [0, 2]], axis=1).clip(0.0, batch.camera.width)
+        y = np.sort(moved[:, [1, 3]], axis=1).clip(0.0, batch.camera.height)
+        boxes3d = batch.det_boxes3d[hit].copy()
+        boxes3d[:, :2] += offsets[hit] * c.offset_sigma_m
+        batch.add_false_positives(np.stack([x[:, 0], y[:, 0], x[:, 1], y[:, 1]], axis=1), boxes3d,
+                                  batch.scores[hit] * c.score_factor, batch.labels[hit], batch.embeddings[hit],
+                                  Cause.DUPLICATE)
 
 
 class DetectionOrder(_Random):
@@ -259,7 +370,7 @@ class DetectionOrder(_Random):
 
     def apply(self, batch: CameraBatch) -> None:
         detected = np.nonzero(batch.detected)[0]
-        clutter = len(batch.clutter.get("scores", ()))
+        clutter = len(batch.clutter.get("scores", ()))  # clutter, ghosts and duplicates
         order = self.rng(batch.camera_index).permutation(len(detected) + clutter)
         batch.detection_index = np.full(len(batch), -1, dtype=np.int64)
         batch.detection_index[detected] = order[: len(detected)]

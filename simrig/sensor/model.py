@@ -14,18 +14,22 @@ from ..geometry import Projection, camera_from_world
 from ..render.visibility import Visibility
 from ..seeding import RandomStreams
 from ..types import GroundTruthFrame, Rig
+from .appearance import Embeddings
 from .batch import CameraBatch, FrameContext
 from .effects import (
     Box2DNoise,
     Clutter,
+    Confusion,
     DetectionDraw,
     DetectionOrder,
     DetectionProbability,
-    Embeddings,
+    Duplicates,
+    MissBursts,
     Monocular3D,
     Scores,
     SensorEffect,
 )
+from .ghosts import GhostWorld
 from .perturbations import PERTURBATION_EFFECTS, DroppedFrames, Scheduled, ScheduledOcclusion
 
 
@@ -47,6 +51,7 @@ class SensorModel:
         self.rig = rig
         sensor = scenario.sensor
         rate = scenario.frame_rate_hz
+        period = 1.0 / rate
         self.scheduled: list[Scheduled] = []
         occlusions, others = [], []
         self.drops: list[DroppedFrames] = []
@@ -60,17 +65,23 @@ class SensorModel:
                 effect = PERTURBATION_EFFECTS[type(config)](config, index, rig, rate)
             (occlusions if isinstance(effect, ScheduledOcclusion) else others).append(effect)
             self.scheduled.append(effect)
-        self.embeddings = Embeddings(streams, sensor.embedding)
+        class_mix = scenario.traffic.class_mix
+        self.embeddings = Embeddings(streams, sensor.embedding, class_mix)
+        self.ghosts = GhostWorld(sensor.ghosts, class_mix, rig, period, sensor.embedding.dimension, streams)
         self.effects: list[SensorEffect] = [
             *occlusions,  # before the probability: they set the visible fraction
             DetectionProbability(sensor.detection),
             *others,
+            MissBursts(streams, sensor.detection, period),
             DetectionDraw(streams),
             Box2DNoise(streams, sensor.box2d),
-            Monocular3D(streams, sensor.box3d),
+            Monocular3D(streams, sensor.box3d, period),
             Scores(streams, sensor.score),
+            Confusion(streams, sensor.confusion),
             self.embeddings,
-            Clutter(sensor.clutter, scenario.traffic.class_mix, sensor.embedding.dimension, streams),
+            Clutter(sensor.clutter, class_mix, sensor.embedding.dimension, streams),
+            self.ghosts,
+            Duplicates(streams, sensor.duplicates),
             DetectionOrder(streams),
         ]
 
@@ -86,6 +97,8 @@ class SensorModel:
         )
         world_from_camera = np.linalg.inv(camera_from_world(self.rig, ego))
         visible_fraction = np.nan_to_num(1.0 - visibility.occlusion, nan=0.0)
+        if self.ghosts.enabled:
+            self.ghosts.advance(state.frame, ego, state.actor_ids, state.classes, np.asarray(state.boxes))
         batches = []
         for index, camera in enumerate(self.rig.cameras):
             centre = world_from_camera[index, :3, 3]
