@@ -128,11 +128,12 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     from pydantic import ValidationError
 
     from .schema import Scenario
+    from .sensor_presets import with_preset
 
     raw = _resolve(path, ())
     raw.setdefault("name", path.stem)
     try:
-        return validate_strict(Scenario, raw)
+        return validate_strict(Scenario, with_preset(raw))
     except ValidationError as error:
         raise ScenarioError(f"scenario file {str(path)!r}: {describe_errors(error)}") from None
     except ValueError as error:

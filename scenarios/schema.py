@@ -146,6 +146,14 @@ class RigConfig(Strict):
 class Scenario(Strict):
     """A named, fully resolved scenario: traffic, rig and timing."""
 
+    @classmethod
+    def model_validate(cls, obj, *args, **kwargs):
+        """As pydantic's, with a ``[sensor] preset`` laid under the scenario's own sensor keys first (files get
+        the same through :func:`simrig.scenarios.load_scenario`)."""
+        from .sensor_presets import with_preset
+
+        return super().model_validate(with_preset(obj) if isinstance(obj, dict) else obj, *args, **kwargs)
+
     name: Annotated[str, Field(min_length=1)]
     description: str = ""
     frame_rate_hz: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False)] = 10.0

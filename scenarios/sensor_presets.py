@@ -18,6 +18,7 @@ the error magnitudes are fitted per family.
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 _NO_NOISE = {"depth_sigma_m": 0.0, "depth_sigma_per_m": 0.0, "lateral_sigma_m": 0.0, "size_sigma": 0.0,
@@ -69,7 +70,20 @@ PRESETS: dict[str, dict[str, Any]] = {
 
 
 def merge_tables(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
-    """``override`` on top of ``base``, tables merged key by key (the scenario loader's rule)."""
+    """``override`` on top of ``base``, tables merged key by key (the scenario loader's rule). ``base`` is taken as
+    a file would give it (pairs as lists): scenarios are validated strictly with JSON's rules, where a tuple is
+    not an array."""
     from . import _merge
 
-    return _merge(base, override)
+    return _merge(json.loads(json.dumps(base)), override)
+
+
+def with_preset(raw: dict[str, Any]) -> dict[str, Any]:
+    """A scenario's raw table (as read from a file) with its ``[sensor] preset`` laid under its own sensor keys,
+    so the scenario's keys override the preset's key by key. Done on the raw table, before validation: the
+    schema validates files strictly with JSON's rules, and a validator that rewrites a table would hand the
+    strict validation Python values instead. An unknown preset is left for the schema to report."""
+    sensor = raw.get("sensor")
+    if not isinstance(sensor, dict) or not isinstance(sensor.get("preset"), str) or sensor["preset"] not in PRESETS:
+        return raw
+    return {**raw, "sensor": merge_tables(PRESETS[sensor["preset"]], sensor)}

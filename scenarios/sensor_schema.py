@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from .base import FiniteFloat, NonNegativeFloat, PositiveFloat, Strict
 
@@ -264,17 +264,14 @@ class SensorConfig(Strict):
     duplicates: DuplicateConfig = Field(default_factory=DuplicateConfig)
     confusion: ConfusionConfig = Field(default_factory=ConfusionConfig)
 
-    @model_validator(mode="before")
+    @field_validator("preset")
     @classmethod
-    def _apply_preset(cls, data):
-        if not isinstance(data, dict) or data.get("preset") is None:
-            return data
-        from .sensor_presets import PRESETS, merge_tables
+    def _known_preset(cls, name: str | None) -> str | None:
+        from .sensor_presets import PRESETS
 
-        name = data["preset"]
-        if name not in PRESETS:
-            raise ValueError(f"preset: unknown detector preset {name!r}; known: {', '.join(PRESETS)}")
-        return merge_tables(PRESETS[name], data)
+        if name is not None and name not in PRESETS:
+            raise ValueError(f"unknown detector preset {name!r}; known: {', '.join(PRESETS)}")
+        return name
 
 
 __all__ = ["FiniteFloat", "RenderConfig", "SensorConfig"]
