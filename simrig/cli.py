@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -523,5 +524,23 @@ def main(argv: list[str] | None = None) -> int:
         return 130
 
 
+def console() -> None:
+    """The ``simrig`` command: :func:`main`, then the process's exit.
+
+    A process that rendered (visibility or images) keeps its one OpenGL context to the end (see
+    :mod:`simrig.render.scene`); tearing it down with the interpreter has been seen to abort a finished run at
+    exit under load ("terminate called without an active exception", exit status -6, after every file was
+    written). Such a process leaves with ``os._exit`` once its output is flushed: everything simrig writes is
+    committed (atomically) before :func:`main` returns, so nothing is lost by skipping the interpreter's
+    teardown."""
+    code = main()
+    scene = sys.modules.get("simrig.render.scene")
+    if scene is not None and scene.offscreen_renderer.cache_info().currsize:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    console()

@@ -30,8 +30,8 @@ confirm_seeds = 1
 [base_settings]
 "render.visibility" = false
 "traffic.vehicles" = 2
-"traffic.spawn_min_distance_m" = 60.0
-"traffic.window_radius_m" = 80.0
+"traffic.spawn_min_distance_m" = 20.0
+"traffic.window_radius_m" = 45.0
 "perturbations" = [{ kind = "miss_burst", frames = [2, 4], probability = 0.5 }]
 
 [objective]
@@ -121,8 +121,8 @@ confirm_top = 0
 [base_settings]
 "render.visibility" = false
 "traffic.vehicles" = 3
-"traffic.spawn_min_distance_m" = 60.0
-"traffic.window_radius_m" = 80.0
+"traffic.spawn_min_distance_m" = 20.0
+"traffic.window_radius_m" = 45.0
 "perturbations" = [{ kind = "occlude", nearest = 1, frames = [5, 9] }]
 
 [objective]
