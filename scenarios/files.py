@@ -16,6 +16,21 @@ if TYPE_CHECKING:
     from pydantic import BaseModel
 
 
+def catalog_entry_or_file(name_or_path: str | Path, entries: dict[str, Path]) -> Path | None:
+    """The catalog entry called ``name_or_path`` (a bare name), else that path if something is there, else None.
+
+    >>> catalog_entry_or_file("smoke", {"smoke": Path("suites/smoke.toml")})
+    PosixPath('suites/smoke.toml')
+    >>> catalog_entry_or_file("no/such/file.toml", {}) is None
+    True
+    """
+    text = str(name_or_path)
+    if text in entries and not Path(text).suffix:
+        return entries[text]
+    path = Path(text)
+    return path if path.exists() else None
+
+
 def read_toml(path: Path, what: str, error: type[Exception]) -> dict[str, Any]:
     """The table of the TOML file ``path`` (``what`` names it in messages, e.g. ``scenario file``)."""
     where = f"{what} {str(path)!r}"

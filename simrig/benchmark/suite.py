@@ -51,7 +51,7 @@ from simrig.scenarios import (
     suite_catalog,
 )
 from simrig.scenarios.base import Strict
-from simrig.scenarios.files import read_toml, validate_strict
+from simrig.scenarios.files import catalog_entry_or_file, read_toml, validate_strict
 from simrig.scenarios.schema import RIG_PRESETS
 
 from ..errors import SimrigError
@@ -145,12 +145,10 @@ class Suite(Strict):
 
 def _path(name_or_path: str | Path) -> Path:
     entries = suite_catalog()
-    text = str(name_or_path)
-    if text in entries and not Path(text).suffix:
-        return entries[text]
-    path = Path(text)
-    if not path.exists():
-        raise SuiteError(f"unknown suite {text!r}: not a named suite ({', '.join(entries)}) nor a .toml file")
+    path = catalog_entry_or_file(name_or_path, entries)
+    if path is None:
+        raise SuiteError(f"unknown suite {str(name_or_path)!r}: not a named suite ({', '.join(entries)}) nor a "
+                         ".toml file")
     return path
 
 

@@ -19,6 +19,7 @@ from simrig.benchmark.evaluate import METRIC_COLUMNS
 from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
 from simrig.scenarios import Scenario, ScenarioError, describe_errors, load_scenario
+from simrig.scenarios.files import catalog_entry_or_file
 from simrig.scenarios.overrides import get_setting, with_setting
 from simrig.scenarios.search_schema import Dimension, SearchSpaceConfig, space_catalog
 
@@ -77,13 +78,10 @@ def _extremes(dimension: Dimension) -> list[Candidate]:
 
 def _path(name_or_path: str | Path) -> Path:
     entries = space_catalog()
-    text = str(name_or_path)
-    if text in entries and not Path(text).suffix:
-        return entries[text]
-    path = Path(text)
-    if not path.is_file():
-        raise SearchError(f"unknown search space {text!r}: not a catalog space ({', '.join(entries)}) nor a "
-                          ".toml file")
+    path = catalog_entry_or_file(name_or_path, entries)
+    if path is None:
+        raise SearchError(f"unknown search space {str(name_or_path)!r}: not a catalog space ({', '.join(entries)}) "
+                          "nor a .toml file")
     return path
 
 

@@ -16,16 +16,10 @@ camera, under both detectors. Written to ``reports/fidelity/leaderboard.md``.
 from __future__ import annotations
 
 import argparse
-import tempfile
 from pathlib import Path
 
-import tomli_w
-from published import command_line, machine, publish  # tests/perf helpers
-from simrig.scenarios import load_scenario
+from published import cached_dataset, command_line, machine, publish  # tests/perf helpers
 
-from simrig.dataset import Dataset
-from simrig.errors import DatasetError
-from simrig.pipeline.generate import generate
 from simrig.pipeline.track import run_tracker
 from simrig.scoring import score
 
@@ -34,21 +28,6 @@ TRACKERS = ("global_hungarian", "saga", "percam_merge", "simpletrack")
 DETECTORS = ("monodis", "ideal_noise")
 PAPER = {"global_hungarian": (0.143, 1998), "saga": (0.242, 522)}  # SAGA-Track paper, Table 3 (KM, FOTA)
 REID = (("highway_surround6", "CAM_FRONT", "deepsort"), ("highway_stereo", "left", "collabmot"))
-
-
-def dataset_for(scene: str, detector: str, seed: int, frames: int, data: Path) -> Dataset:
-    out = data / f"{scene}-{detector}-seed{seed}-{frames}f"
-    try:
-        existing = Dataset.open(out)
-        if existing.manifest["frames"] == frames:
-            return existing
-    except DatasetError:
-        pass
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / f"{scene}-{detector}.toml"
-        path.write_text(tomli_w.dumps({"extends": scene, "sensor": {"preset": detector}}))
-        generate(load_scenario(path), seed=seed, out=out, frames=frames, overwrite=True)
-    return Dataset.open(out)
 
 
 def main() -> None:
@@ -73,7 +52,7 @@ def main() -> None:
     for scene in SCENES:
         for detector in DETECTORS:
             for seed in args.seeds:
-                dataset = dataset_for(scene, detector, seed, args.frames, args.data)
+                dataset = cached_dataset(scene, seed, args.frames, args.data, preset=detector)
                 for name in TRACKERS:
                     folder = args.data / "tracks" / f"{scene}-{detector}-seed{seed}" / name
                     metrics = score(dataset, run_tracker(dataset, name, folder).out).metrics3d["overall"]
@@ -93,7 +72,7 @@ def main() -> None:
     for scene, camera, tracker in REID:
         for detector in DETECTORS:
             for seed in args.seeds:
-                dataset = dataset_for(scene, detector, seed, args.frames, args.data)
+                dataset = cached_dataset(scene, seed, args.frames, args.data, preset=detector)
                 results = {}
                 for name in ("sort", tracker):
                     folder = args.data / "tracks" / f"{scene}-{detector}-seed{seed}" / name

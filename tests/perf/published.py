@@ -5,8 +5,10 @@ from __future__ import annotations
 import platform
 import shlex
 import sys
+import tempfile
 from pathlib import Path
 
+import tomli_w
 from simrig.scenarios import load_scenario
 
 from simrig.dataset import Dataset
@@ -14,16 +16,22 @@ from simrig.errors import DatasetError
 from simrig.pipeline.generate import generate
 
 
-def cached_dataset(scenario: str, seed: int, frames: int, data: Path) -> Dataset:
-    """The dataset of (``scenario``, ``seed``, ``frames``) under ``data``, generated only if absent."""
-    out = data / f"{scenario}-seed{seed}-{frames}f"
+def cached_dataset(scenario: str, seed: int, frames: int, data: Path, *, preset: str | None = None) -> Dataset:
+    """The dataset of (``scenario``, ``seed``, ``frames``) under ``data``, generated only if absent; ``preset``: the
+    catalog scenario with that detector preset (``[sensor] preset``) instead of its own detector."""
+    out = data / f"{scenario}{'' if preset is None else '-' + preset}-seed{seed}-{frames}f"
     try:
         existing = Dataset.open(out)
         if existing.manifest["frames"] == frames:
             return existing
     except DatasetError:
         pass
-    generate(load_scenario(scenario), seed=seed, out=out, frames=frames, overwrite=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        source = scenario
+        if preset is not None:  # as a user's file would say it, so the preset lies under the scenario's keys
+            source = Path(tmp) / f"{scenario}-{preset}.toml"
+            source.write_text(tomli_w.dumps({"extends": scenario, "sensor": {"preset": preset}}))
+        generate(load_scenario(source), seed=seed, out=out, frames=frames, overwrite=True)
     return Dataset.open(out)
 
 
