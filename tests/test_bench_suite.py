@@ -80,7 +80,7 @@ def test_settings_by_path_and_alias():
     assert with_setting(scenario, "perturbations.0.frames.1", 60).perturbations[0].frames == (50, 60)
     assert with_setting(scenario, "traffic.vehicles", 7).traffic.vehicles == 7
     assert scenario.traffic.vehicles == 25  # the original is untouched
-    assert parameter_value(scenario, "miss_probability") == 0.05
+    assert parameter_value(scenario, "miss_probability") == pytest.approx(0.1)
     assert apply_parameter(scenario, "miss_probability", 0.3).sensor.detection.probability == 0.7
     assert isinstance(apply_parameter(scenario, "traffic.vehicles", 12.0).traffic.vehicles, int)
     with pytest.raises(ScenarioError, match="vehicles"):
@@ -94,10 +94,10 @@ def test_smoke_plan_counted_by_hand():
     plan = make_plan(suite, scenarios)
     # per seed: highway_surround6 base + 2 miss + 2 overlap = 5 points, stereo_occluder base + 2 miss = 3
     assert len(plan.points) == 2 * (5 + 3)
-    # the miss value 0.05 and the overlap 10 are the scenarios' own: the base cell again
+    # the miss value 0.1 and the overlap 10 are the scenarios' own: the base cell again
     assert len(plan.cells) == 2 * (3 + 2)
     for point in plan.points:
-        if point.sweep in ("miss_probability", "rig.overlap_deg") and point.value in (0.05, 10.0):
+        if point.sweep in ("miss_probability", "rig.overlap_deg") and point.value in (0.1, 10.0):
             base = next(p for p in plan.points if p.sweep == BASE and p.scenario == point.scenario
                         and p.seed == point.seed)
             assert point.cell == base.cell

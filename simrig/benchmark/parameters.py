@@ -6,7 +6,7 @@ An alias maps the value a suite sweeps (and a plot shows) to a scenario setting:
 >>> from simrig.scenarios import load_scenario
 >>> s = load_scenario("highway_surround6")
 >>> round(parameter_value(s, "miss_probability"), 6)
-0.05
+0.1
 >>> apply_parameter(s, "miss_probability", 0.3).sensor.detection.probability
 0.7
 """
