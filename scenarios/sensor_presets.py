@@ -61,10 +61,10 @@ PRESETS: dict[str, dict[str, Any]] = {
         "embedding": {"sigma": 0.0, "occlusion_sigma": 0.0},
     },
     "ideal_noise": {},
-    "monodis": _camera_detector(0.0391, 0.293, 0.0810, 22.5, 0.05, 0.613, 0.85),
-    "centernet": _camera_detector(0.0345, 0.261, 0.0784, 22.8, 0.055, 0.645, 0.85),
-    "km3d": _camera_detector(0.0375, 0.279, 0.0896, 19.1, 0.045, 0.648, 0.85),
-    "bevformer_small": _camera_detector(0.0347, 0.263, 0.0839, 15.7, 0.03, 0.200, 0.9),
+    "monodis": _camera_detector(0.0426, 0.319, 0.0896, 22.6, 0.05, 0.706, 0.85),
+    "centernet": _camera_detector(0.0381, 0.288, 0.0870, 23.1, 0.055, 0.737, 0.85),
+    "km3d": _camera_detector(0.0412, 0.307, 0.0992, 18.3, 0.045, 0.741, 0.85),
+    "bevformer_small": _camera_detector(0.0380, 0.288, 0.0933, 16.3, 0.03, 0.224, 0.9),
 }
 """Preset name → its ``[sensor]`` tables (values the scenario does not set)."""
 
