@@ -7,8 +7,8 @@ Run explicitly (not part of the test suite)::
         [--data runs/compare] [--out reports/trackers/comparison.md]
 
 Each (scenario, seed) dataset is generated once into ``--data`` (reused when a complete one with the same
-frame count is there) and every tracker runs on its detections (the detector is the scenario's own, today's
-default). Every tracker is online; a variant is ``name:key=value,…``. Per tracker the tables sum the counts
+frame count is there) and every tracker runs on its detections (the detector is the catalog scenario's own:
+``bevformer_small``). Every tracker is online; a variant is ``name:key=value,…``. Per tracker the tables sum the counts
 (IDS, FRAG, MT, ML, TP, FP, FN) over the sequences and average AMOTA, AMOTP and MOTA (3D, every class). The IDS
 ratio against ``global_hungarian`` is given per sequence and pooled, separately for the seeds used while the
 trackers were built and for the ``--held-out`` seeds no one tuned on. A finished (sequence, tracker) keeps
@@ -69,13 +69,16 @@ def run_one(dataset, scenario: str, seed: int, name: str, data: Path) -> tuple[d
     folder = data / "tracks" / f"{scenario}-seed{seed}-{dataset.frame_count}f" / (
         name.replace(":", "-").replace("=", "").replace(",", "-"))
     cached = folder / "metrics.json"
+    detections = dataset.manifest["manifest_sha256"]  # a dataset made since (another detector) invalidates it
     if cached.exists():
         saved = json.loads(cached.read_text())
-        return saved["metrics"], saved["frames_per_second"]
+        if saved.get("dataset") == detections:
+            return saved["metrics"], saved["frames_per_second"]
     run = run_tracker(dataset, base, folder, params)
     metrics = {k: float(v) for k, v in score(dataset, run.out).metrics3d["overall"].items()
                if isinstance(v, int | float)}
-    cached.write_text(json.dumps({"metrics": metrics, "frames_per_second": run.frames_per_second}))
+    cached.write_text(json.dumps({"dataset": detections, "metrics": metrics,
+                                  "frames_per_second": run.frames_per_second}))
     return metrics, run.frames_per_second
 
 

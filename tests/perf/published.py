@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import platform
 import shlex
+import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -17,22 +18,45 @@ from simrig.pipeline.generate import generate
 
 
 def cached_dataset(scenario: str, seed: int, frames: int, data: Path, *, preset: str | None = None) -> Dataset:
-    """The dataset of (``scenario``, ``seed``, ``frames``) under ``data``, generated only if absent; ``preset``: the
-    catalog scenario with that detector preset (``[sensor] preset``) instead of its own detector."""
+    """The dataset of (``scenario``, ``seed``, ``frames``) under ``data``, generated only if absent or made from
+    another scenario (a catalog or preset change since); ``preset``: the catalog scenario with that detector preset
+    (``[sensor] preset``) instead of its own detector. A dataset of the same world made with another detector is
+    reused for its traffic and visibility (only the detector reruns)."""
+    from simrig.pipeline.cache import world_key
+
     out = data / f"{scenario}{'' if preset is None else '-' + preset}-seed{seed}-{frames}f"
-    try:
-        existing = Dataset.open(out)
-        if existing.manifest["frames"] == frames:
-            return existing
-    except DatasetError:
-        pass
     with tempfile.TemporaryDirectory() as tmp:
         source = scenario
         if preset is not None:  # as a user's file would say it, so the preset lies under the scenario's keys
             source = Path(tmp) / f"{scenario}-{preset}.toml"
             source.write_text(tomli_w.dumps({"extends": scenario, "sensor": {"preset": preset}}))
-        generate(load_scenario(source), seed=seed, out=out, frames=frames, overwrite=True)
+        wanted = load_scenario(source)
+    try:
+        existing = Dataset.open(out)
+    except DatasetError:
+        existing = None
+    if existing is not None and existing.frame_count == frames:
+        if existing.scenario == wanted.model_dump(mode="json"):
+            return existing
+        made_from = load_scenario_dump(existing.scenario)
+        if made_from is not None and world_key(made_from, seed, frames) == world_key(wanted, seed, frames):
+            with tempfile.TemporaryDirectory(dir=data) as tmp:
+                staged = generate(wanted, seed=seed, out=Path(tmp) / "new", frames=frames, world_from=existing).path
+                shutil.rmtree(out)
+                staged.rename(out)
+            return Dataset.open(out)
+    generate(wanted, seed=seed, out=out, frames=frames, overwrite=True)
     return Dataset.open(out)
+
+
+def load_scenario_dump(dump: dict):
+    """The scenario a dataset's manifest recorded, or None when today's schema no longer reads it."""
+    from simrig.scenarios import Scenario
+
+    try:
+        return Scenario.model_validate(dump)
+    except ValueError:
+        return None
 
 
 def command_line() -> str:
