@@ -32,10 +32,13 @@ class IgnoreRule(enum.IntFlag):
     """Its visible fraction is at or below the minimum."""
     TRUNCATION = enum.auto()
     """More of it is outside the image than the maximum truncation."""
+    SOURCE = enum.auto()
+    """The source of an imported dataset marks it as not scored (a MOTChallenge distractor class, a KITTI
+    ``DontCare`` region or ``Van``/``Person``-type distractor: see :mod:`simrig.dataset.importing`)."""
 
 
 IGNORE_RULE_NAMES: tuple[str, ...] = tuple(rule.name.lower() for rule in IgnoreRule)
-"""``range``, ``height``, ``visibility``, ``truncation``: the rules in bit order."""
+"""``range``, ``height``, ``visibility``, ``truncation``, ``source``: the rules in bit order."""
 
 
 def evaluation_of(scenario: dict, override: EvaluationConfig | dict | None = None) -> EvaluationConfig:
@@ -86,6 +89,8 @@ def ignore_rules(truth: GroundTruth, config: EvaluationConfig) -> np.ndarray:
     visible = 1.0 - truth.occlusion
     rules |= np.where(np.isfinite(visible) & (visible <= config.min_visible_fraction), int(IgnoreRule.VISIBILITY), 0)
     rules |= np.where(truth.truncation > config.max_truncation, int(IgnoreRule.TRUNCATION), 0)
+    if truth.source_ignored is not None:
+        rules |= np.where(truth.source_ignored, int(IgnoreRule.SOURCE), 0)
     return np.where(truth.in_view, rules, 0)
 
 
@@ -103,7 +108,7 @@ def ignored_counts(rules: np.ndarray) -> dict[str, int]:
     that breaks two rules counts under both; ``ignored`` once).
 
     >>> ignored_counts(np.array([0, 1, 3]))
-    {'ignored': 2, 'range': 2, 'height': 1, 'visibility': 0, 'truncation': 0}
+    {'ignored': 2, 'range': 2, 'height': 1, 'visibility': 0, 'truncation': 0, 'source': 0}
     """
     rules = np.asarray(rules)
     out = {"ignored": int(np.count_nonzero(rules))}

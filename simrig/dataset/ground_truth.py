@@ -35,7 +35,10 @@ class GroundTruth:
     in view); in_view; truncation [0, 1] (fraction of the unclipped projected box outside the image);
     depth [m] (camera-frame z); occlusion [0, 1] (1 − visible / silhouette pixels; NaN: not rendered);
     causes: every cause recorded for the actor in that camera; detected: whether that camera's detector
-    reported it; probability: its detection probability.
+    reported it; probability: its detection probability. source_ignored: ``(R, C)`` boxes the source of an
+    imported dataset marks as not to be scored (MOTChallenge distractor classes, KITTI ``DontCare``; ``None``:
+    none). causes_known: ``False`` for imported ground truth, which records no sensor and so no causes (an
+    error's cause is then ``unknown``, never ``none``).
     """
 
     rig: Rig
@@ -55,6 +58,8 @@ class GroundTruth:
     causes: np.ndarray
     detected: np.ndarray
     probability: np.ndarray
+    source_ignored: np.ndarray | None = None
+    causes_known: bool = True
 
     @property
     def miss_causes(self) -> np.ndarray:
@@ -122,6 +127,27 @@ def _per_camera(table, name: str, n: int, c: int, path) -> np.ndarray:
     return table.column(name).to_numpy(zero_copy_only=False).reshape(n, c)
 
 
+def _source_ignored(dataset: Dataset, n: int, c: int) -> np.ndarray | None:
+    """``(n, c)`` the boxes an imported dataset's source marks as not scored, or ``None`` when it marks none."""
+    table = dataset.source_ignored_table()
+    if table is None or table.num_rows == 0:
+        return None
+    truth = dataset.table("ground_truth")
+    frame = truth.column("frame").to_numpy().astype(np.int64)
+    actor = truth.column("actor_id").to_numpy()
+    key = frame * (int(actor.max(initial=0)) + 1) + actor
+    order = np.argsort(key, kind="stable")
+    wanted = (table.column("frame").to_numpy().astype(np.int64) * (int(actor.max(initial=0)) + 1)
+              + table.column("actor_id").to_numpy())
+    position = np.clip(np.searchsorted(key[order], wanted), 0, max(n - 1, 0))
+    if n == 0 or np.any(key[order][position] != wanted):
+        raise DatasetError(f"{dataset.path}: source_ignored lists a (frame, actor) that is not in the ground truth")
+    camera_of = {name: i for i, name in enumerate(dataset.rig.camera_names)}
+    marked = np.zeros((n, c), dtype=bool)
+    marked[order[position], [camera_of[name] for name in table.column("camera").to_pylist()]] = True
+    return marked
+
+
 def load_ground_truth(dataset: Dataset) -> GroundTruth:
     """Read the ground truth, projections, visibility and sensor truth of ``dataset`` into a
     :class:`GroundTruth` (vectorised; one pass over each table)."""
@@ -156,6 +182,8 @@ def load_ground_truth(dataset: Dataset) -> GroundTruth:
         causes=np.zeros((n, c), dtype=np.int64),
         detected=np.zeros((n, c), dtype=bool),
         probability=np.zeros((n, c)),
+        source_ignored=_source_ignored(dataset, n, c),
+        causes_known=dataset.causes_known,
     )
     sensor = dataset.table("sensor_truth")
     actor = sensor.column("actor_id").to_numpy()
