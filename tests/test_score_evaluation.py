@@ -62,7 +62,7 @@ def test_each_rule_at_its_boundary():
         ("car", 60.0, [0.0, 0.0, 50.0, 10.0], 0.7, 1.0),  # all four
     ])
     rules = ignore_rules(truth, EvaluationConfig())
-    R, H, V, T = (int(r) for r in IgnoreRule)
+    R, H, V, T = (int(r) for r in list(IgnoreRule)[:4])
     assert rules[:, 0].tolist() == [0, R, R, 0, 0, H, V, 0, 0, 0, T, R | H | V | T]
     assert not rules[:, 1].any()  # not in view of camera 1
     assert ignored_counts(rules) == {"ignored": 6, "range": 3, "height": 2, "visibility": 2, "truncation": 2,
