@@ -207,7 +207,7 @@ def project_tracks(truth: GroundTruth, tracks3d: TrackRows) -> TrackRows:
     starts = np.searchsorted(tracks3d.frame, truth.frames)
     stops = np.searchsorted(tracks3d.frame, truth.frames, side="right")
     for position, (lo, hi) in enumerate(zip(starts, stops, strict=True)):
-        if hi == lo:
+        if hi == lo or not names.size:  # no frame's tracks, or a rig without cameras (a nuScenes import)
             continue
         projection = project_boxes(tracks3d.boxes[lo:hi], truth.rig, truth.egos[position])
         cam, box = np.nonzero(projection.in_view)
