@@ -12,7 +12,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from simrig.cli import main
-from simrig.dataset.tracks_file import TRACKS2D_FILE, TRACKS3D_FILE
+from simrig.dataset.tracks_file import TRACKS3D_FILE
 from simrig.export import export
 from simrig.pipeline.track import run_tracker
 from simrig.scoring import score
@@ -55,17 +55,10 @@ def test_motchallenge_export_scores_as_the_tracks(small_dataset, sort_tracks, tm
     assert_same(score(small_dataset, data, evaluation=settings, fmt="motchallenge"), original)
 
 
-def test_kitti_export_scores_as_the_tracks_at_its_precision(small_dataset, sort_tracks, tmp_path):
-    """KITTI files keep pixel boxes to 4 decimals: the expected score is the original's with boxes rounded so."""
+def test_kitti_export_scores_as_the_tracks(small_dataset, sort_tracks, tmp_path):
+    """KITTI files keep pixel boxes at full precision: the export scores exactly as the tracks."""
     out = export(small_dataset, "kitti", tmp_path / "kitti", tracks=sort_tracks)
-    table = pq.read_table(sort_tracks / TRACKS2D_FILE)
-    for name in ("x1", "y1", "x2", "y2"):
-        rounded = np.array([float(f"{v:.4f}") for v in table.column(name).to_pylist()])
-        table = table.set_column(table.schema.get_field_index(name), name, pa.array(rounded))
-    rounded_dir = tmp_path / "rounded"
-    rounded_dir.mkdir()
-    pq.write_table(table, rounded_dir / TRACKS2D_FILE)
-    assert_same(score(small_dataset, out), score(small_dataset, rounded_dir))
+    assert_same(score(small_dataset, out), score(small_dataset, sort_tracks))
 
 
 def test_nuscenes_export_scores_as_the_tracks(small_dataset, saga_tracks, tmp_path):

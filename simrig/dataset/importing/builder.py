@@ -33,6 +33,8 @@ from ...types import Camera, Rig
 from ..manifest import package_versions
 from ..writer import DatasetWriter
 
+ID_STRIDE = 1_000_000_000
+"""Actor id = sequence number × this + the sequence's own id (MOTChallenge and KITTI ids are per sequence)."""
 SEED = 0
 """An imported dataset has no random streams; its manifest's ``seed`` is 0."""
 SOURCE_IGNORED_FILE = "source_ignored.parquet"

@@ -32,7 +32,7 @@ scored:
 A sequence named ``CAMERA-CLASS`` with a simrig class (``simrig export``'s layout, one sequence per camera and
 class) becomes rows of that class in camera ``CAMERA``; any other sequence is a camera of its own name. The
 MOTChallenge visibility column is not kept (TrackEval does not use it; a box with visibility 0 is scored).
-Object ids are per sequence: actor id = sequence number × :data:`ID_STRIDE` + the sequence's id. The dataset
+Object ids are per sequence: actor id = sequence number × :data:`~.builder.ID_STRIDE` + the sequence's id. The dataset
 scores class-agnostic (``classes = "any"``, MOTChallenge's protocol) unless every sequence names its class, and
 ignores nothing but the source's distractors.
 """
@@ -47,10 +47,8 @@ import numpy as np
 from ...types import ActorClass, Rig
 from ..tracks_file import CLASSES
 from ..tracks_motchallenge import ANY, integer, number, parse_lines
-from .builder import ImportedTruth, SourceError, check_unique, uncalibrated_camera
+from .builder import ID_STRIDE, ImportedTruth, SourceError, check_unique, uncalibrated_camera
 
-ID_STRIDE = 1_000_000_000
-"""Actor id = sequence number × this + the sequence's own id (MOTChallenge ids are per sequence)."""
 PEDESTRIAN_CLASS = 1
 DISTRACTOR_CLASSES = {2: "person_on_vehicle", 7: "static_person", 8: "distractor", 12: "reflection"}
 MOT20_DISTRACTOR_CLASSES = {**DISTRACTOR_CLASSES, 6: "non_mot_vehicle"}

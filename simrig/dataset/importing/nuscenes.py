@@ -10,8 +10,8 @@ What the import does, following the devkit's tracking evaluation (nuscenes-devki
 AMOTA family:
 
 - every scene, in the order of ``scene.json``, its key frames (samples) from ``first_sample_token`` along
-  ``next``; the scenes' frames follow each other (frame rate 2 Hz, nuScenes' key-frame rate; timestamps are the
-  samples' own, each scene shifted to start 0.5 s after the previous one ends);
+  ``next``; the scenes' frames follow each other (timestamps are the samples' own, each scene shifted to start
+  0.5 s after the previous one ends; the frame rate is the median step, 2 Hz for nuScenes' key frames);
 - the ego pose of a frame is that of the sample's ``LIDAR_TOP`` key-frame sample data (as the devkit's range
   filter reads it); the ego velocity a finite difference of the poses;
 - boxes: ``sample_annotation`` rows whose category maps to a tracking class (``category_to_tracking_name``:
@@ -21,8 +21,9 @@ AMOTA family:
   by the scorer as the devkit applies it. The bike-rack rule (bicycles inside a ``static_object.bicycle_rack``
   box) is not applied;
 - an object is its ``instance_token``: actor ids number the instances in order of first appearance; the
-  velocity is the devkit's ``box_velocity`` (centred difference of the neighbouring annotations, NaN when it
-  cannot be estimated);
+  velocity is the annotation's ``velocity`` when it has one (``simrig export`` writes the exact velocity), else
+  the devkit's ``box_velocity`` (centred difference of the neighbouring annotations, NaN when it cannot be
+  estimated);
 - a tracker's results JSON is read with this dataset's sample tokens (``sample_tokens.json``), and its
   ``tracking_id`` names one track per scene, as in the devkit.
 
@@ -221,15 +222,19 @@ def read_nuscenes_truth(src: Path) -> ImportedTruth:
                                       f"{tables.line('sample_annotation', annotation['token'])}: annotation "
                                       f"{annotation['token']!r}: {error} (translation 3, size 3, rotation 4 "
                                       "numbers)") from None
+                velocity = annotation.get("velocity")  # simrig's export writes the exact one
                 rows.append((frame, actor, name, x, y, z, length, width, height, yaw,
-                             *_velocity(tables, annotation)))
+                             *(_velocity(tables, annotation) if velocity is None else map(float, velocity[:2]))))
     if not tokens:
         raise SourceError(f"{tables.folder / 'scene.json'}: holds no scene")
     rows.sort(key=lambda r: (r[0], r[1]))
     n = len(rows)
     frame = np.array([r[0] for r in rows], dtype=np.int64)
+    steps = np.diff(np.array(timestamps))
+    steps = steps[steps > 0]
+    rate = 1.0 / float(np.median(steps)) if len(steps) else FRAME_RATE_HZ
     return ImportedTruth(
-        name=f"nuscenes-{tables.folder.name}", frame_rate_hz=FRAME_RATE_HZ, rig=Rig("none", ()),
+        name=f"nuscenes-{tables.folder.name}", frame_rate_hz=rate, rig=Rig("none", ()),
         timestamps=np.array(timestamps), egos=np.array(poses, dtype=float).reshape(-1, 6),
         frame=frame, actor_id=np.array([r[1] for r in rows], dtype=np.int64),
         label=np.array([r[2] for r in rows], dtype=object), boxes=np.array([r[3:] for r in rows]).reshape(n, 9),
