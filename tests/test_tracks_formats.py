@@ -120,7 +120,8 @@ def test_bad_files_get_one_line_naming_file_and_line(small_dataset, tmp_path, ca
 
 
 def test_layouts_and_ids_without_a_dataset(tmp_path):
-    """Detection of each layout, KITTI types and DontCare, nuScenes string ids and yaw, on hand-written files."""
+    """Detection of each layout, KITTI types (pedestrians kept) and DontCare, nuScenes string ids and yaw (a
+    class simrig has not, trailer, left out), on hand-written files."""
     from simrig.dataset.tracks_formats import detect_format, read_tracks_as
 
     cameras = ("left", "right")
@@ -132,8 +133,8 @@ def test_layouts_and_ids_without_a_dataset(tmp_path):
         "1 8 Pedestrian 0 0 -10 10 20 30 50 -1 -1 -1 -1000 -1000 -1000 -10 0.5\n")
     assert detect_format(kitti, cameras) == "kitti"
     rows = read_tracks_as(kitti, frame_count=2, cameras=cameras).tracks2d
-    assert rows.track_id.tolist() == [7] and rows.label.tolist() == ["car"]
-    assert rows.boxes.tolist() == [[10, 20, 30, 50]] and rows.score.tolist() == [0.5]
+    assert rows.track_id.tolist() == [7, 8] and rows.label.tolist() == ["car", "pedestrian"]
+    assert rows.boxes.tolist() == [[10, 20, 30, 50]] * 2 and rows.score.tolist() == [0.5] * 2
 
     mot = tmp_path / "mot"
     mot.mkdir()
@@ -148,7 +149,7 @@ def test_layouts_and_ids_without_a_dataset(tmp_path):
            "velocity": [1, 0], "tracking_name": "car", "tracking_score": 0.5}
     nu = tmp_path / "r.json"
     nu.write_text(json.dumps({"results": {"s0": [{**box, "tracking_id": "b"}, {**box, "tracking_id": "a"}],
-                                          "s1": [{**box, "tracking_id": "x", "tracking_name": "pedestrian"}]}}))
+                                          "s1": [{**box, "tracking_id": "x", "tracking_name": "trailer"}]}}))
     rows = read_tracks_as(nu, frame_count=2, cameras=cameras, tokens={"s0": 0, "s1": 1}).tracks3d
-    assert sorted(rows.track_id.tolist()) == [0, 1]  # "a", "b" numbered in sorted order; the pedestrian left out
+    assert sorted(rows.track_id.tolist()) == [0, 1]  # "a", "b" numbered in sorted order; the trailer left out
     assert rows.boxes[0, :7].tolist() == pytest.approx([1, 2, 3, 5, 2, 1.5, yaw])

@@ -190,13 +190,13 @@ def read_nuscenes_truth(src: Path) -> ImportedTruth:
                               referrer=("sample_data", lidar[sample["token"]]["token"], "ego_pose_token"))
             scene_poses.append([*pose["translation"][:3], _yaw(pose["rotation"])])
         scene_poses = np.array(scene_poses, dtype=float).reshape(-1, 4)
-        velocity = (np.gradient(scene_poses[:, :2], np.array(scene_times), axis=0) if len(samples) > 1
-                    else np.zeros((len(samples), 2)))
+        ego_velocity = (np.gradient(scene_poses[:, :2], np.array(scene_times), axis=0) if len(samples) > 1
+                        else np.zeros((len(samples), 2)))
         for k, sample in enumerate(samples):
             frame = len(tokens)
             tokens.append(sample["token"])
             timestamps.append(scene_times[k])
-            poses.append([*scene_poses[k], *velocity[k]])
+            poses.append([*scene_poses[k], *ego_velocity[k]])
             for annotation in annotations.get(sample["token"], []):
                 instance = tables.get("instance", annotation["instance_token"],
                                       referrer=("sample_annotation", annotation["token"], "instance_token"))
@@ -222,9 +222,9 @@ def read_nuscenes_truth(src: Path) -> ImportedTruth:
                                       f"{tables.line('sample_annotation', annotation['token'])}: annotation "
                                       f"{annotation['token']!r}: {error} (translation 3, size 3, rotation 4 "
                                       "numbers)") from None
-                velocity = annotation.get("velocity")  # simrig's export writes the exact one
+                exact = annotation.get("velocity")  # simrig's export writes the exact one
                 rows.append((frame, actor, name, x, y, z, length, width, height, yaw,
-                             *(_velocity(tables, annotation) if velocity is None else map(float, velocity[:2]))))
+                             *(_velocity(tables, annotation) if exact is None else map(float, exact[:2]))))
     if not tokens:
         raise SourceError(f"{tables.folder / 'scene.json'}: holds no scene")
     rows.sort(key=lambda r: (r[0], r[1]))
