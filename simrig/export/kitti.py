@@ -82,8 +82,12 @@ def write(data: ExportInput, out: Path) -> None:
         occlusion = _keyed(visibility, camera, truth.frame[rows], truth.actor_id[rows], "occlusion", np.nan)
         occluded = np.where(np.isnan(occlusion), 3, np.digitize(np.nan_to_num(occlusion), [0.1, 0.5]))
         truncation_level = np.digitize(truncated, TRUNCATION_LEVELS, right=True)
-        dimensions, location, rotation = camera_boxes(truth, rows, c)
-        alpha = _wrap(rotation - np.arctan2(location[:, 0], location[:, 2]))
+        if data.dataset.has_3d:
+            dimensions, location, rotation = camera_boxes(truth, rows, c)
+            alpha = _wrap(rotation - np.arctan2(location[:, 0], location[:, 2]))
+        else:  # imported 2D boxes: KITTI's "unknown" 3D values
+            dimensions, location = np.full((len(rows), 3), -1.0), np.full((len(rows), 3), -1000.0)
+            rotation, alpha = np.full(len(rows), -10.0), np.full(len(rows), -10.0)
         lines = []
         for k, r in enumerate(rows):
             b = truth.boxes2d[r, c]
