@@ -15,7 +15,6 @@ from simrig.cli import main
 from simrig.dataset import Dataset
 from simrig.dataset.importing import import_dataset
 from simrig.export import export
-from simrig.pipeline.track import run_tracker
 from simrig.scoring import score
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -127,16 +126,6 @@ def test_nuscenes_import_reads_the_devkit_tables(tmp_path):
 
 
 # ----------------------------------------------------------------------------------------------- round trips
-@pytest.fixture(scope="module")
-def sort_tracks(small_dataset, tmp_path_factory):
-    return run_tracker(small_dataset, "sort", tmp_path_factory.mktemp("sort") / "sort").out
-
-
-@pytest.fixture(scope="module")
-def saga_tracks(small_dataset, tmp_path_factory):
-    return run_tracker(small_dataset, "saga", tmp_path_factory.mktemp("saga") / "saga").out
-
-
 def assert_same(ours: dict, theirs: dict, names=None):
     assert ours.keys() == theirs.keys()
     for name in names or ours:

@@ -14,18 +14,7 @@ import pytest
 from simrig.cli import main
 from simrig.dataset.tracks_file import TRACKS3D_FILE
 from simrig.export import export
-from simrig.pipeline.track import run_tracker
 from simrig.scoring import score
-
-
-@pytest.fixture(scope="module")
-def sort_tracks(small_dataset, tmp_path_factory):
-    return run_tracker(small_dataset, "sort", tmp_path_factory.mktemp("sort") / "sort").out
-
-
-@pytest.fixture(scope="module")
-def saga_tracks(small_dataset, tmp_path_factory):
-    return run_tracker(small_dataset, "saga", tmp_path_factory.mktemp("saga") / "saga").out
 
 
 def assert_same(ours, theirs, part="metrics2d"):
