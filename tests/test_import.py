@@ -2,6 +2,7 @@
 nuScenes devkit on nuScenes), a generated dataset survives export → import with the same score, what the source
 lacks is marked unknown, and bad input gets one line naming the file and line."""
 
+import importlib.util
 import json
 import os
 import subprocess
@@ -211,6 +212,9 @@ def test_imported_dataset_renders_and_summarises(tmp_path, capsys):
     assert main(["info", str(tmp_path / "ds"), "--verify"]) == 0
     out = capsys.readouterr().out
     assert "imported from motchallenge" in out and "error causes unknown" in out
+    if importlib.util.find_spec("rerun") is not None:  # the viewer is an optional extra
+        assert main(["view", str(tmp_path / "ds"), "--save", str(tmp_path / "v.rrd")]) == 0
+        assert (tmp_path / "v.rrd").stat().st_size > 1000
 
 
 # ----------------------------------------------------------------------------------------------- bad input
