@@ -1,7 +1,7 @@
 """A MOTChallenge benchmark folder written as another tool would (not by simrig): ground truth and one tracker's
 results for several sequences, in TrackEval's ``MotChallenge2DBox`` layout, with the conventions that matter —
-1-based frames, the ``consider`` flag, the class column (pedestrians, distractor classes, other classes) and the
-visibility column."""
+1-based frames, the ``consider`` flag (read as an integer), the class column (pedestrians, distractor classes,
+other classes, a tracker box on an other-class box and a distractor at once) and the visibility column."""
 
 from __future__ import annotations
 
@@ -57,6 +57,15 @@ def write_case(root: Path, seed: int = 0, sequences=(("MOT17-02", 40, 6), ("MOT1
             tracker_lines.append(f"{f},901,22,902,200,120,0.8,-1,-1,-1")
             # a reflection (class 12) nobody tracks: no miss
             gt_lines.append(f"{f},{next_id + 2},1500,900,60,150,0,12,0.5")
+        for f in range(2, length + 1, 5):
+            # a tracker box on a car and a static person at once: TrackEval's match gives it to the car (higher
+            # IoU), so it is not removed but stays a false positive
+            gt_lines.append(f"{f},{next_id + 3},600,50,100,100,0,3,1")
+            gt_lines.append(f"{f},{next_id + 4},610,50,100,100,0,7,1")
+            tracker_lines.append(f"{f},902,602,50,100,100,0.7,-1,-1,-1")
+            # a pedestrian not to be considered (consider 0.4, read as the integer 0) with a tracker box on it
+            gt_lines.append(f"{f},{next_id + 5},300,600,50,140,0.4,1,1")
+            tracker_lines.append(f"{f},903,301,601,50,140,0.6,-1,-1,-1")
         # false positives
         for f in rng.integers(1, length + 1, size=5):
             tracker_lines.append(f"{f},{700 + int(f)},{rng.uniform(0, 1800):.1f},{rng.uniform(0, 900):.1f},50,120,"

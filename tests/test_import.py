@@ -53,9 +53,14 @@ def test_motchallenge_import_scores_as_trackeval(tmp_path, capsys):
     assert ours["3d"] is None and "AMOTA" not in printed and "3D: not scored" in printed
     assert set(ours["errors_by_cause"]["2d"]) <= {"unknown", "total", "ignored"}
     assert ours["errors_by_cause"]["2d"]["unknown"] == ours["errors_by_cause"]["2d"]["total"]
-    # the distractors are the source's: 3 per third frame of each sequence (a static person, a reflection)
+    # the source's marks: distractors (a static person and a reflection every third frame, a static person every
+    # fifth) and rows not evaluated (a car every third frame, a car and a pedestrian with consider 0.4 every fifth)
     gt = ours["2d"]["ground_truth"]["overall"]
-    assert gt["source"] == gt["ignored"] == sum(2 * len(range(1, n + 1, 3)) for n in (40, 30, 25))
+    thirds, fifths = (sum(len(range(first, n + 1, step)) for n in (40, 30, 25)) for first, step in ((1, 3), (2, 5)))
+    assert (gt["source"], gt["unevaluated"]) == (2 * thirds + fifths, thirds + 2 * fifths)
+    assert gt["ignored"] == gt["source"] + gt["unevaluated"]
+    # had the rows not evaluated been left out, the tracker boxes on the car and static person would be removed
+    assert ours["2d"]["overall"]["CLR_FP"] >= 2 * fifths
 
 
 def test_motchallenge_import_keeps_sequences_and_conventions(tmp_path):
@@ -73,7 +78,10 @@ def test_motchallenge_import_keeps_sequences_and_conventions(tmp_path):
     left, top, width, height = map(float, first[2:6])
     assert truth.boxes2d[row, 1].tolist() == [left, top, left + width, top + height]  # 1-based frame → 0-based
     assert truth.label[row] == "pedestrian" and np.isnan(truth.boxes[row]).all()
-    assert dataset.source["left_out_rows"] == sum(len(range(1, n + 1, 3)) for n in (40, 30, 25))  # the cars
+    marks = Dataset.open(tmp_path / "ds").source_ignored_table().to_pydict()
+    car = marks["reason"].index("class 3 (car), consider 0")
+    assert marks["kind"][car] == "unevaluated" and "class 7 (static_person)" in marks["reason"]
+    assert marks["kind"][marks["reason"].index("class 1 (pedestrian), consider 0.4")] == "unevaluated"
 
 
 # ----------------------------------------------------------------------------------------------- nuScenes

@@ -35,10 +35,11 @@ class GroundTruth:
     in view); in_view; truncation [0, 1] (fraction of the unclipped projected box outside the image);
     depth [m] (camera-frame z); occlusion [0, 1] (1 − visible / silhouette pixels; NaN: not rendered);
     causes: every cause recorded for the actor in that camera; detected: whether that camera's detector
-    reported it; probability: its detection probability. source_ignored: ``(R, C)`` boxes the source of an
-    imported dataset marks as not to be scored (MOTChallenge distractor classes, KITTI ``DontCare``; ``None``:
-    none). causes_known: ``False`` for imported ground truth, which records no sensor and so no causes (an
-    error's cause is then ``unknown``, never ``none``).
+    reported it; probability: its detection probability. source_ignored: ``(R, C)`` what the source of an
+    imported dataset marks each box as (0: nothing; 1 + an index into :data:`SOURCE_KINDS`: a distractor — a
+    MOTChallenge distractor class, KITTI ``DontCare`` — or ground truth its benchmark does not evaluate), or
+    ``None`` when it marks none. causes_known: ``False`` for imported ground truth, which records no sensor and
+    so no causes (an error's cause is then ``unknown``, never ``none``).
     """
 
     rig: Rig
@@ -127,8 +128,15 @@ def _per_camera(table, name: str, n: int, c: int, path) -> np.ndarray:
     return table.column(name).to_numpy(zero_copy_only=False).reshape(n, c)
 
 
+SOURCE_KINDS = ("distractor", "unevaluated")
+"""What an imported dataset's source marks a box as (the ``kind`` column of ``source_ignored.parquet``): a
+distractor (a tracker box matched to it is removed) or ground truth its benchmark does not evaluate (a tracker
+box matched to it is kept). :attr:`GroundTruth.source_ignored` holds 1 + the kind's index, 0 for none."""
+
+
 def _source_ignored(dataset: Dataset, n: int, c: int) -> np.ndarray | None:
-    """``(n, c)`` the boxes an imported dataset's source marks as not scored, or ``None`` when it marks none."""
+    """``(n, c)`` rule bits of the boxes an imported dataset's source marks as not scored, or ``None`` when it
+    marks none."""
     table = dataset.source_ignored_table()
     if table is None or table.num_rows == 0:
         return None
@@ -143,8 +151,13 @@ def _source_ignored(dataset: Dataset, n: int, c: int) -> np.ndarray | None:
     if n == 0 or np.any(key[order][position] != wanted):
         raise DatasetError(f"{dataset.path}: source_ignored lists a (frame, actor) that is not in the ground truth")
     camera_of = {name: i for i, name in enumerate(dataset.rig.camera_names)}
-    marked = np.zeros((n, c), dtype=bool)
-    marked[order[position], [camera_of[name] for name in table.column("camera").to_pylist()]] = True
+    kinds = table.column("kind").to_pylist()
+    unknown = sorted(set(kinds) - set(SOURCE_KINDS))
+    if unknown:
+        raise DatasetError(f"{dataset.path}: source_ignored kind {unknown[0]!r} (kinds: {', '.join(SOURCE_KINDS)})")
+    marked = np.zeros((n, c), dtype=np.int8)
+    marked[order[position], [camera_of[name] for name in table.column("camera").to_pylist()]] = [
+        1 + SOURCE_KINDS.index(kind) for kind in kinds]
     return marked
 
 

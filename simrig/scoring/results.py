@@ -19,10 +19,11 @@ METRICS_3D = ("AMOTA", "AMOTP", "MOTAR", "MOTA", "MOTP", "RECALL", "IDS", "FRAG"
 METRICS_2D = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDSW", "Frag", "MT", "PT", "ML", "IDF1", "IDP",
               "IDR", "CLR_TP", "CLR_FN", "CLR_FP")
 """2D metrics, TrackEval style (MOTP: mean IoU of matches)."""
-IGNORED_COLUMNS = ("boxes", "ignored", "range", "height", "visibility", "truncation", "source", "delivered")
-"""Per camera: ground-truth boxes in view, how many are ignored, and by each rule (a box may break several);
-``source``: marked not scored by an imported dataset's source; ``delivered``: the scored (not ignored) boxes the
-camera's detector reported."""
+IGNORED_COLUMNS = ("boxes", "ignored", "range", "height", "visibility", "truncation", "source", "unevaluated",
+                   "delivered")
+"""Per camera: ground-truth boxes in view, how many are ignored, and by each rule (a box may break several;
+``source``: a distractor and ``unevaluated``: not evaluated, as an imported dataset's source marks it);
+``delivered``: the scored (not ignored) boxes the camera's detector reported."""
 COUNT_METRICS = {"IDS", "FRAG", "MT", "ML", "TP", "FP", "FN", "IDSW", "Frag", "PT", "CLR_TP", "CLR_FN", "CLR_FP"}
 
 

@@ -14,8 +14,11 @@ invented:
 - no sensor: the ``detections`` and ``sensor_truth`` tables are empty, and every error's cause is ``unknown``;
 - no visibility or truncation measured: occlusion NaN, visible pixels −1 (not rendered), truncation 0.
 
-Boxes the source marks as not scored (distractors, ``DontCare``) are in ``source_ignored.parquet`` (``frame,
-actor_id, camera, reason``), read as the :attr:`~simrig.dataset.evaluation.IgnoreRule.SOURCE` rule.
+Boxes the source marks as not scored are in ``source_ignored.parquet`` (``frame, actor_id, camera, kind,
+reason``): ``kind`` ``distractor`` (distractor classes, ``DontCare``; read as the
+:attr:`~simrig.dataset.evaluation.IgnoreRule.SOURCE` rule: a tracker box matched to one is removed) or
+``unevaluated`` (ground truth the benchmark does not evaluate; the ``UNEVALUATED`` rule: a tracker box matched
+to one stays a false positive).
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ import pyarrow.parquet as pq
 from ...errors import DatasetError, SimrigError
 from ...rig import rig_to_dict
 from ...types import Camera, Rig
+from ..ground_truth import SOURCE_KINDS
 from ..manifest import package_versions
 from ..writer import DatasetWriter
 
@@ -39,7 +43,8 @@ SEED = 0
 """An imported dataset has no random streams; its manifest's ``seed`` is 0."""
 SOURCE_IGNORED_FILE = "source_ignored.parquet"
 SOURCE_IGNORED = pa.schema([pa.field("frame", pa.int32()), pa.field("actor_id", pa.int64()),
-                            pa.field("camera", pa.string()), pa.field("reason", pa.string())])
+                            pa.field("camera", pa.string()), pa.field("kind", pa.string()),
+                            pa.field("reason", pa.string())])
 SAMPLE_TOKENS_FILE = "sample_tokens.json"
 
 
@@ -62,8 +67,9 @@ class ImportedTruth:
     name: the dataset's scenario name; frame_rate_hz [Hz]; timestamps ``(F,)`` [s]; egos ``(F, 6)`` world-frame
     ego pose ``x, y, z`` [m], ``yaw`` [rad], ``vx, vy`` [m/s] (zeros when the source has none). Rows: frame,
     actor_id, label ``(R,)``; boxes ``(R, 9)`` world boxes (NaN without 3D); per camera ``(R, C)``: boxes2d
-    ``(R, C, 4)`` pixel boxes (NaN where not in view), in_view, occlusion (NaN: unknown), ignored (the source
-    marks the box not scored) with ``reasons`` ``(R,)`` why. ``evaluation``: the dataset's ``[evaluation]``
+    ``(R, C, 4)`` pixel boxes (NaN where not in view), in_view, occlusion (NaN: unknown), ignored (what the
+    source marks the box as: 0 nothing, 1 + an index into :data:`~simrig.dataset.ground_truth.SOURCE_KINDS`) with
+    ``reasons`` ``(R,)`` why. ``evaluation``: the dataset's ``[evaluation]``
     table (the source benchmark's protocol); ``source``: the manifest's description of the source;
     ``tokens``/``scenes``: a nuScenes import's sample token per frame and scenes.
     """
@@ -158,9 +164,11 @@ def write_imported(truth: ImportedTruth, out: Path | str, *, overwrite: bool = F
         writer.write_json("rig.json", rig_to_dict(truth.rig))
         rows, cams = np.nonzero(truth.ignored)
         if len(rows):
+            kinds = np.array(SOURCE_KINDS, dtype=object)[truth.ignored[rows, cams].astype(int) - 1]
             table = pa.table({"frame": truth.frame[rows].astype(np.int32), "actor_id": truth.actor_id[rows],
                               "camera": np.array(truth.rig.camera_names, dtype=object)[cams].astype(str),
-                              "reason": truth.reasons[rows].astype(str)}, schema=SOURCE_IGNORED)
+                              "kind": kinds.astype(str), "reason": truth.reasons[rows].astype(str)},
+                             schema=SOURCE_IGNORED)
             pq.write_table(table, writer.partial / SOURCE_IGNORED_FILE)
         if truth.tokens is not None:
             writer.write_json(SAMPLE_TOKENS_FILE, {"tokens": list(truth.tokens), "scenes": truth.scenes or []})

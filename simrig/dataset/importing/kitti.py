@@ -136,7 +136,7 @@ def read_kitti_truth(src: Path) -> ImportedTruth:
         name="kitti-import", frame_rate_hz=FRAME_RATE_HZ, rig=rig, timestamps=np.arange(frames) / FRAME_RATE_HZ,
         egos=np.zeros((frames, 6)), frame=frame[order], actor_id=actor[order],
         label=np.array(columns["label"], dtype=object)[order], boxes=np.full((n, 9), np.nan), boxes2d=boxes2d,
-        in_view=in_view, occlusion=np.full((n, c), np.nan), ignored=in_view & (reasons != "")[:, None],
+        in_view=in_view, occlusion=np.full((n, c), np.nan), ignored=in_view * (reasons != "")[:, None].astype(np.int8),
         reasons=reasons, evaluation=IMPORT_EVALUATION,
         source={"format": "kitti", "path": str(src), "ground_truth_3d": False, "calibrated_rig": False,
                 "causes": "unknown", "sequences": {camera: str(file) for camera, file in sequences},

@@ -13,7 +13,8 @@ ground truth, 30 Hz, and the boxes' extent). The dataset's frames are 0-based (M
 and as many as the longest sequence; its frame rate is the first sequence's.
 
 Rows are ``frame, id, left, top, width, height, consider[, class, visibility, …]`` (pixels; every line with as
-many columns as the file's first, at least 7). What the import does with them follows TrackEval's
+many columns as the file's first, at least 7; without a class column every row is a pedestrian, where
+TrackEval refuses such ground truth). What the import does with them follows TrackEval's
 ``MotChallenge2DBox`` preprocessing (TrackEval 1.3, ``get_preprocessed_seq_data``), which it reproduces when
 scored:
 
@@ -23,11 +24,11 @@ scored:
   (and 6 ``non_mot_vehicle`` in a ``MOT20`` benchmark) — whatever their ``consider`` flag: boxes marked as not
   scored (:attr:`~simrig.dataset.evaluation.IgnoreRule.SOURCE`): a tracker box matched to one (Hungarian on
   IoU ≥ 0.5) is removed, and the box is no miss;
-- every other row (other classes — cars, occluders … — and pedestrians with ``consider`` 0) is left out and
-  counted in the manifest's ``source.left_out_rows``. TrackEval keeps these in its preprocessing match, where
-  they can take a tracker box away from a distractor (the box then stays a false positive in TrackEval and is
-  removed here); the two agree whenever no tracker box overlaps such a row and a distractor at IoU ≥ 0.5 at
-  once.
+- every other row (other classes — cars, occluders … — and pedestrians whose ``consider``, read as an integer
+  as TrackEval reads it, is 0): boxes marked as ground truth the benchmark does not evaluate
+  (:attr:`~simrig.dataset.evaluation.IgnoreRule.UNEVALUATED`): they take part in the match above like every
+  box, so they can take a tracker box away from a distractor, but a tracker box matched to one is kept (a
+  false positive), and the box is no miss — TrackEval's rule exactly.
 
 A sequence named ``CAMERA-CLASS`` with a simrig class (``simrig export``'s layout, one sequence per camera and
 class) becomes rows of that class in camera ``CAMERA``; any other sequence is a camera of its own name. The
@@ -50,8 +51,14 @@ from ..tracks_motchallenge import ANY, integer, number, parse_lines
 from .builder import ID_STRIDE, ImportedTruth, SourceError, check_unique, uncalibrated_camera
 
 PEDESTRIAN_CLASS = 1
-DISTRACTOR_CLASSES = {2: "person_on_vehicle", 7: "static_person", 8: "distractor", 12: "reflection"}
-MOT20_DISTRACTOR_CLASSES = {**DISTRACTOR_CLASSES, 6: "non_mot_vehicle"}
+CLASS_NAMES = {1: "pedestrian", 2: "person_on_vehicle", 3: "car", 4: "bicycle", 5: "motorbike", 6: "non_mot_vehicle",
+               7: "static_person", 8: "distractor", 9: "occluder", 10: "occluder_on_ground", 11: "occluder_full",
+               12: "reflection", 13: "crowd"}
+"""MOTChallenge's class ids (TrackEval's ``class_name_to_class_id``)."""
+DISTRACTOR_CLASSES = (2, 7, 8, 12)
+MOT20_DISTRACTOR_CLASSES = (*DISTRACTOR_CLASSES, 6)
+DISTRACTOR, UNEVALUATED = 1, 2
+"""What the source marks a row as: 1 + the index of the kind in :data:`~simrig.dataset.ground_truth.SOURCE_KINDS`."""
 COLUMNS = ("frame", "id", "left", "top", "width", "height", "consider", "class", "visibility")
 DEFAULT_FRAME_RATE_HZ = 30.0
 IMPORT_EVALUATION = {"ignore": True, "min_height_px": 0.0, "min_visible_fraction": 0.0, "max_truncation": 1.0}
@@ -106,10 +113,11 @@ def camera_and_label(name: str) -> tuple[str, str | None]:
     return name, None
 
 
-def read_sequence(folder: Path, distractors: dict[int, str]) -> dict:
-    """The rows of one sequence's ``gt/gt.txt``: frame (0-based), id, box, label, distractor reason."""
+def read_sequence(folder: Path, distractors: tuple[int, ...]) -> dict:
+    """The rows of one sequence's ``gt/gt.txt``: frame (0-based), id, box, what the source marks it as (0: scored
+    ground truth, :data:`DISTRACTOR`, :data:`UNEVALUATED`) and why."""
     file = folder / "gt" / "gt.txt"
-    rows, left_out = [], 0
+    rows = []
     for line, fields in parse_lines(file, ",", 7, COLUMNS):
         frame = integer(file, line, fields, 0, COLUMNS) - 1
         if frame < 0:
@@ -121,15 +129,15 @@ def read_sequence(folder: Path, distractors: dict[int, str]) -> dict:
         if width <= 0 or height <= 0:
             raise SourceError(f"{file}:{line}: box width {fields[4]} and height {fields[5]} must be positive")
         kind = integer(file, line, fields, 7, COLUMNS) if len(fields) >= 8 else PEDESTRIAN_CLASS
+        name = f"class {kind} ({CLASS_NAMES.get(kind, 'unknown')})"
         if kind in distractors:
-            reason = f"{distractors[kind]} (class {kind})"
-        elif kind == PEDESTRIAN_CLASS and consider != 0:
-            reason = ""
+            mark, reason = DISTRACTOR, name
+        elif kind == PEDESTRIAN_CLASS and int(consider) != 0:  # TrackEval reads the flag as an integer
+            mark, reason = 0, ""
         else:
-            left_out += 1
-            continue
-        rows.append((frame, ident, left, top, left + width, top + height, reason))
-    return {"rows": rows, "left_out": left_out, "file": file}
+            mark, reason = UNEVALUATED, f"{name}, consider {fields[6]}"
+        rows.append((frame, ident, left, top, left + width, top + height, mark, reason))
+    return {"rows": rows, "file": file}
 
 
 def read_motchallenge_truth(src: Path) -> ImportedTruth:
@@ -137,13 +145,12 @@ def read_motchallenge_truth(src: Path) -> ImportedTruth:
     benchmark, folders = sequence_folders(src)
     distractors = MOT20_DISTRACTOR_CLASSES if benchmark.upper().startswith("MOT20") else DISTRACTOR_CLASSES
     cameras: dict[str, tuple[int, int]] = {}
-    columns: dict[str, list] = {key: [] for key in ("frame", "actor", "camera", "label", "box", "reason")}
-    lengths, rates, left_out, named = [], [], 0, True
+    columns: dict[str, list] = {key: [] for key in ("frame", "actor", "camera", "label", "box", "mark", "reason")}
+    lengths, rates, named = [], [], True
     for number_, folder in enumerate(folders):
         info = _seqinfo(folder)
         sequence = read_sequence(folder, distractors)
         rows = sequence["rows"]
-        left_out += sequence["left_out"]
         last = max((r[0] for r in rows), default=-1) + 1
         length = int(info.get("seqLength", last))
         if last > length:
@@ -156,12 +163,13 @@ def read_motchallenge_truth(src: Path) -> ImportedTruth:
         size = (int(info.get("imWidth", np.ceil(extent[0]))), int(info.get("imHeight", np.ceil(extent[1]))))
         if cameras.setdefault(camera, size) != size:
             raise SourceError(f"{folder}: camera {camera!r} has image size {size}, elsewhere {cameras[camera]}")
-        for frame, ident, x1, y1, x2, y2, reason in rows:
+        for frame, ident, x1, y1, x2, y2, mark, reason in rows:
             columns["frame"].append(frame)
             columns["actor"].append(number_ * ID_STRIDE + ident)
             columns["camera"].append(camera)
             columns["label"].append(label or ActorClass.PEDESTRIAN.value)
             columns["box"].append((x1, y1, x2, y2))
+            columns["mark"].append(mark)
             columns["reason"].append(reason)
     rig = Rig("imported", tuple(uncalibrated_camera(name, *size) for name, size in cameras.items()))
     frames = max(lengths)
@@ -175,16 +183,18 @@ def read_motchallenge_truth(src: Path) -> ImportedTruth:
     in_view = np.zeros((n, c), dtype=bool)
     in_view[np.arange(n), camera_index] = True
     reasons = np.array(columns["reason"], dtype=object)[order]
+    marks = np.array(columns["mark"], dtype=np.int8)[order]
     truth = ImportedTruth(
         name=f"{benchmark}-import", frame_rate_hz=rate, rig=rig, timestamps=np.arange(frames) / rate,
         egos=np.zeros((frames, 6)), frame=frame[order], actor_id=np.array(columns["actor"], dtype=np.int64)[order],
         label=np.array(columns["label"], dtype=object)[order], boxes=np.full((n, 9), np.nan), boxes2d=boxes2d,
-        in_view=in_view, occlusion=np.full((n, c), np.nan), ignored=in_view & (reasons != "")[:, None],
+        in_view=in_view, occlusion=np.full((n, c), np.nan), ignored=in_view * marks[:, None],
         reasons=reasons, evaluation={**IMPORT_EVALUATION, "classes": "each" if named else ANY},
         source={"format": "motchallenge", "path": str(src), "ground_truth_3d": False, "calibrated_rig": False,
                 "causes": "unknown", "sequences": {f.name: {"length": n_, "frame_rate_hz": r}
                                                    for f, n_, r in zip(folders, lengths, rates, strict=True)},
-                "id_stride": ID_STRIDE, "left_out_rows": left_out},
+                "id_stride": ID_STRIDE, "distractor_rows": int(np.sum(marks == DISTRACTOR)),
+                "unevaluated_rows": int(np.sum(marks == UNEVALUATED))},
     )
     check_unique(truth, str(src))
     return truth

@@ -239,7 +239,7 @@ def read_nuscenes_truth(src: Path) -> ImportedTruth:
         frame=frame, actor_id=np.array([r[1] for r in rows], dtype=np.int64),
         label=np.array([r[2] for r in rows], dtype=object), boxes=np.array([r[3:] for r in rows]).reshape(n, 9),
         boxes2d=np.zeros((n, 0, 4)), in_view=np.zeros((n, 0), dtype=bool), occlusion=np.zeros((n, 0)),
-        ignored=np.zeros((n, 0), dtype=bool), reasons=np.full(n, "", dtype=object),
+        ignored=np.zeros((n, 0), dtype=np.int8), reasons=np.full(n, "", dtype=object),
         evaluation={}, tokens=tokens, scenes=scenes,
         source={"format": "nuscenes", "path": str(src), "ground_truth_3d": True, "calibrated_rig": False,
                 "causes": "unknown", "scenes": len(scenes), "instances": len(instances),
