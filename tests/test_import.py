@@ -280,3 +280,24 @@ def test_bad_input_one_line_naming_file_and_line(tmp_path, capsys):
                           str(tmp_path / "nu-ds")])
     assert f"{str(tmp_path / 'nu-ds')!r} already holds a complete dataset" in err and "--overwrite" in err
     assert (tmp_path / "nu-ds" / "manifest.json").read_bytes() == manifest
+
+
+def test_tracks_of_the_missing_dimension_are_refused(tmp_path, capsys):
+    """3D tracks on 2D-only ground truth, or 2D tracks on ground truth without cameras: one line, no number."""
+    results = write_nuscenes_case(tmp_path / "nu")
+    _, data = write_mot_case(tmp_path / "mot")
+    import_dataset("nuscenes", tmp_path / "nu", tmp_path / "nu-ds")
+    import_dataset("motchallenge", tmp_path / "mot", tmp_path / "mot-ds")
+    mot_ds = Dataset.open(tmp_path / "mot-ds")
+    tokens = {f"{mot_ds.scenario['name']}-seed0-{f:06d}": f for f in range(3)}
+    assert set(tokens) <= set(mot_ds.sample_tokens())
+    document = json.loads(results.read_text())
+    boxes = next(iter(document["results"].values()))
+    (tmp_path / "r3d.json").write_text(json.dumps({"results": {token: boxes for token in tokens}}))
+    err = _error(capsys, ["score", str(tmp_path / "mot-ds"), str(tmp_path / "r3d.json")])
+    assert "2D ground truth only" in err
+    camera_file = tmp_path / "cam" / "CAM.txt"
+    camera_file.parent.mkdir()
+    camera_file.write_text("1,1,10,10,20,20,0.9,-1,-1,-1\n")
+    err = _error(capsys, ["score", str(tmp_path / "nu-ds"), str(camera_file)])
+    assert "CAM" in err  # the dataset has no camera of that name (it has none)
