@@ -32,11 +32,14 @@ from pydantic import Field
 
 from .base import NonNegativeFloat, PositiveFloat, Strict
 
-NUSCENES_CLASS_RANGE_M: dict[str, float] = {"car": 50.0, "truck": 50.0, "bus": 50.0, "motorcycle": 40.0}
-"""[m] nuScenes' evaluation range per class (BEV distance from the ego; in range when strictly closer). The 3D
-score always uses it; the 2D evaluation region uses it unless ``range_m`` says otherwise."""
+VEHICLE_CLASS_RANGE_M: dict[str, float] = {"car": 50.0, "truck": 50.0, "bus": 50.0, "motorcycle": 40.0}
+NUSCENES_CLASS_RANGE_M: dict[str, float] = {**VEHICLE_CLASS_RANGE_M, "pedestrian": 40.0, "bicycle": 40.0}
+"""[m] nuScenes' evaluation range per class (BEV distance from the ego; in range when strictly closer; devkit
+``configs/tracking_nips_2019.json``). The 3D score always uses it; the 2D evaluation region uses it unless
+``range_m`` says otherwise. Pedestrians and bicycles come only from imported ground truth, so a scenario's
+default ``range_m`` lists the vehicles."""
 
-ClassRanges = dict[Literal["car", "truck", "bus", "motorcycle"], PositiveFloat]
+ClassRanges = dict[Literal["car", "truck", "bus", "motorcycle", "pedestrian", "bicycle"], PositiveFloat]
 
 
 class EvaluationConfig(Strict):
@@ -44,7 +47,7 @@ class EvaluationConfig(Strict):
 
     ignore: bool = True
     """Apply the rules below; false: every box in a camera's view is scored."""
-    range_m: PositiveFloat | ClassRanges = Field(default_factory=lambda: dict(NUSCENES_CLASS_RANGE_M))
+    range_m: PositiveFloat | ClassRanges = Field(default_factory=lambda: dict(VEHICLE_CLASS_RANGE_M))
     """[m] one range for every class, or a range per class (classes left out keep nuScenes' range)."""
     min_height_px: NonNegativeFloat = 25.0
     """[px] boxes shorter than this are ignored (0: no height rule)."""

@@ -165,6 +165,15 @@ def _cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_import(args: argparse.Namespace) -> int:
+    from .dataset import Dataset
+    from .dataset.importing import import_dataset
+
+    import_dataset(args.format, args.src, args.out, overwrite=args.overwrite)
+    print(Dataset.open(args.out).summary())
+    return 0
+
+
 def _cmd_score(args: argparse.Namespace) -> int:
     from .dataset.evaluation import evaluation_overrides
     from .scoring import score
@@ -417,6 +426,14 @@ def build_parser() -> argparse.ArgumentParser:
     exporter.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
                           help="an [evaluation] key, as for score: the ignored ground truth is written as distractors")
     exporter.set_defaults(run=_cmd_export)
+
+    importer = commands.add_parser("import", help="make a dataset of ground truth from MOTChallenge, KITTI or nuScenes")
+    importer.add_argument("src", type=Path, help="MOTChallenge: a sequence, benchmark or TrackEval folder; KITTI: a "
+                          "label_02 folder (or an export's); nuScenes: the folder of the version's tables")
+    importer.add_argument("--format", required=True, choices=("motchallenge", "kitti", "nuscenes"))
+    importer.add_argument("--out", type=Path, required=True, help="dataset folder to write")
+    importer.add_argument("--overwrite", action="store_true", help="replace a dataset already in --out")
+    importer.set_defaults(run=_cmd_import)
 
     track = commands.add_parser("track", help="run a registered tracker over a dataset and write its tracks")
     track.add_argument("dataset", type=Path)

@@ -31,12 +31,16 @@ BOX2D_FIELDS: tuple[str, ...] = ("x1", "y1", "x2", "y2")
 
 
 class ActorClass(enum.StrEnum):
-    """Object classes simrig simulates. The string value is what the dataset stores."""
+    """Object classes. The string value is what the dataset stores. Traffic simulates the vehicles (car, truck,
+    bus, motorcycle); pedestrians and bicycles come only from imported ground truth (``simrig import``) and the
+    tracks scored on it (nuScenes' names)."""
 
     CAR = "car"
     TRUCK = "truck"
     BUS = "bus"
     MOTORCYCLE = "motorcycle"
+    PEDESTRIAN = "pedestrian"
+    BICYCLE = "bicycle"
 
 
 def _readonly(array: np.ndarray, dtype, shape_tail: tuple[int, ...], name: str) -> np.ndarray:

@@ -24,3 +24,19 @@ def small_dataset(tmp_path_factory, small_scenario):
     out = tmp_path_factory.mktemp("datasets") / "small-seed0"
     generate(small_scenario, seed=0, out=out, progress=False)
     return Dataset.open(out)
+
+
+@pytest.fixture(scope="session")
+def sort_tracks(small_dataset, tmp_path_factory):
+    """SORT's tracks (2D, per camera) on ``small_dataset``."""
+    from simrig.pipeline.track import run_tracker
+
+    return run_tracker(small_dataset, "sort", tmp_path_factory.mktemp("sort") / "sort").out
+
+
+@pytest.fixture(scope="session")
+def saga_tracks(small_dataset, tmp_path_factory):
+    """SAGA's tracks (3D and 2D) on ``small_dataset``."""
+    from simrig.pipeline.track import run_tracker
+
+    return run_tracker(small_dataset, "saga", tmp_path_factory.mktemp("saga") / "saga").out

@@ -21,7 +21,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "geometry": ("simrig.geometry", "simrig.rig"),
     "trackers": ("simrig.trackers",),
     "making data": ("simrig.world", "simrig.render", "simrig.sensor"),
-    "storage": ("simrig.dataset", "simrig.export"),
+    "storage": ("simrig.dataset", "simrig.dataset.importing", "simrig.export"),
     "judging": ("simrig.scoring", "simrig.detector"),
     "pipeline": ("simrig.pipeline",),
     "orchestration": ("simrig.benchmark", "simrig.search", "simrig.testing"),

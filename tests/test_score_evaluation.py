@@ -62,10 +62,11 @@ def test_each_rule_at_its_boundary():
         ("car", 60.0, [0.0, 0.0, 50.0, 10.0], 0.7, 1.0),  # all four
     ])
     rules = ignore_rules(truth, EvaluationConfig())
-    R, H, V, T = (int(r) for r in IgnoreRule)
+    R, H, V, T = (int(r) for r in list(IgnoreRule)[:4])
     assert rules[:, 0].tolist() == [0, R, R, 0, 0, H, V, 0, 0, 0, T, R | H | V | T]
     assert not rules[:, 1].any()  # not in view of camera 1
-    assert ignored_counts(rules) == {"ignored": 6, "range": 3, "height": 2, "visibility": 2, "truncation": 2}
+    assert ignored_counts(rules) == {"ignored": 6, "range": 3, "height": 2, "visibility": 2, "truncation": 2,
+                                    "source": 0, "unevaluated": 0}
     assert not ignore_rules(truth, EvaluationConfig(ignore=False)).any()
     wider = ignore_rules(truth, EvaluationConfig(range_m={"motorcycle": 45.0}, min_height_px=0, max_truncation=1))
     assert wider[:, 0].tolist() == [0, R, 0, 0, 0, 0, V, 0, 0, 0, 0, R | V]

@@ -44,8 +44,9 @@ from .simpletrack import nms
 from .turning_motion import BICYCLE, CTRA
 
 MOTION_BY_CLASS = {ActorClass.CAR: CTRA, ActorClass.TRUCK: CTRA, ActorClass.BUS: CTRA,
-                   ActorClass.MOTORCYCLE: BICYCLE}
-"""The motion model of each class (module docstring, 2)."""
+                   ActorClass.MOTORCYCLE: BICYCLE, ActorClass.BICYCLE: BICYCLE, ActorClass.PEDESTRIAN: CTRA}
+"""The motion model of each class (module docstring, 2; Poly-MOT gives bicycles the bicycle model; pedestrians,
+which simrig's traffic never makes, get CTRA here)."""
 NO_BIRTH = -2
 
 

@@ -14,7 +14,7 @@ from simrig.scenarios import describe_errors
 from simrig.scenarios.evaluation_schema import EvaluationConfig
 
 from ..errors import SimrigError
-from .ground_truth import GroundTruth
+from .ground_truth import SOURCE_KINDS, GroundTruth
 
 
 class EvaluationError(SimrigError):
@@ -32,10 +32,18 @@ class IgnoreRule(enum.IntFlag):
     """Its visible fraction is at or below the minimum."""
     TRUNCATION = enum.auto()
     """More of it is outside the image than the maximum truncation."""
+    SOURCE = enum.auto()
+    """The source of an imported dataset marks it as a distractor (a MOTChallenge distractor class, a KITTI
+    ``DontCare`` region or ``Van``/``Person_sitting`` box: see :mod:`simrig.dataset.importing`): a tracker box
+    matched to it is removed."""
+    UNEVALUATED = enum.auto()
+    """The source has it as ground truth that its benchmark does not evaluate (MOTChallenge: a class other than
+    pedestrian and the distractors, or ``consider`` 0). Unlike the other rules, a tracker box matched to it is
+    kept (a false positive), as TrackEval's ``MotChallenge2DBox`` preprocessing keeps it."""
 
 
 IGNORE_RULE_NAMES: tuple[str, ...] = tuple(rule.name.lower() for rule in IgnoreRule)
-"""``range``, ``height``, ``visibility``, ``truncation``: the rules in bit order."""
+"""``range``, ``height``, ``visibility``, ``truncation``, ``source``, ``unevaluated``: the rules in bit order."""
 
 
 def evaluation_of(scenario: dict, override: EvaluationConfig | dict | None = None) -> EvaluationConfig:
@@ -86,7 +94,15 @@ def ignore_rules(truth: GroundTruth, config: EvaluationConfig) -> np.ndarray:
     visible = 1.0 - truth.occlusion
     rules |= np.where(np.isfinite(visible) & (visible <= config.min_visible_fraction), int(IgnoreRule.VISIBILITY), 0)
     rules |= np.where(truth.truncation > config.max_truncation, int(IgnoreRule.TRUNCATION), 0)
+    if truth.source_ignored is not None:
+        rules |= np.where(truth.source_ignored == 1 + SOURCE_KINDS.index("distractor"), int(IgnoreRule.SOURCE), 0)
+        rules |= np.where(truth.source_ignored == 1 + SOURCE_KINDS.index("unevaluated"),
+                          int(IgnoreRule.UNEVALUATED), 0)
     return np.where(truth.in_view, rules, 0)
+
+
+KEEPS_MATCHES = int(IgnoreRule.UNEVALUATED)
+"""Rules whose boxes leave a tracker box matched to them in place (every other rule removes it)."""
 
 
 def rule_names(mask: int) -> list[str]:
@@ -103,7 +119,7 @@ def ignored_counts(rules: np.ndarray) -> dict[str, int]:
     that breaks two rules counts under both; ``ignored`` once).
 
     >>> ignored_counts(np.array([0, 1, 3]))
-    {'ignored': 2, 'range': 2, 'height': 1, 'visibility': 0, 'truncation': 0}
+    {'ignored': 2, 'range': 2, 'height': 1, 'visibility': 0, 'truncation': 0, 'source': 0, 'unevaluated': 0}
     """
     rules = np.asarray(rules)
     out = {"ignored": int(np.count_nonzero(rules))}

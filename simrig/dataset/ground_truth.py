@@ -35,7 +35,11 @@ class GroundTruth:
     in view); in_view; truncation [0, 1] (fraction of the unclipped projected box outside the image);
     depth [m] (camera-frame z); occlusion [0, 1] (1 − visible / silhouette pixels; NaN: not rendered);
     causes: every cause recorded for the actor in that camera; detected: whether that camera's detector
-    reported it; probability: its detection probability.
+    reported it; probability: its detection probability. source_ignored: ``(R, C)`` what the source of an
+    imported dataset marks each box as (0: nothing; 1 + an index into :data:`SOURCE_KINDS`: a distractor — a
+    MOTChallenge distractor class, KITTI ``DontCare`` — or ground truth its benchmark does not evaluate), or
+    ``None`` when it marks none. causes_known: ``False`` for imported ground truth, which records no sensor and
+    so no causes (an error's cause is then ``unknown``, never ``none``).
     """
 
     rig: Rig
@@ -55,6 +59,8 @@ class GroundTruth:
     causes: np.ndarray
     detected: np.ndarray
     probability: np.ndarray
+    source_ignored: np.ndarray | None = None
+    causes_known: bool = True
 
     @property
     def miss_causes(self) -> np.ndarray:
@@ -122,6 +128,39 @@ def _per_camera(table, name: str, n: int, c: int, path) -> np.ndarray:
     return table.column(name).to_numpy(zero_copy_only=False).reshape(n, c)
 
 
+SOURCE_KINDS = ("distractor", "unevaluated")
+"""What an imported dataset's source marks a box as (the ``kind`` column of ``source_ignored.parquet``): a
+distractor (a tracker box matched to it is removed) or ground truth its benchmark does not evaluate (a tracker
+box matched to it is kept). :attr:`GroundTruth.source_ignored` holds 1 + the kind's index, 0 for none."""
+
+
+def _source_ignored(dataset: Dataset, n: int, c: int) -> np.ndarray | None:
+    """``(n, c)`` rule bits of the boxes an imported dataset's source marks as not scored, or ``None`` when it
+    marks none."""
+    table = dataset.source_ignored_table()
+    if table is None or table.num_rows == 0:
+        return None
+    truth = dataset.table("ground_truth")
+    frame = truth.column("frame").to_numpy().astype(np.int64)
+    actor = truth.column("actor_id").to_numpy()
+    key = frame * (int(actor.max(initial=0)) + 1) + actor
+    order = np.argsort(key, kind="stable")
+    wanted = (table.column("frame").to_numpy().astype(np.int64) * (int(actor.max(initial=0)) + 1)
+              + table.column("actor_id").to_numpy())
+    position = np.clip(np.searchsorted(key[order], wanted), 0, max(n - 1, 0))
+    if n == 0 or np.any(key[order][position] != wanted):
+        raise DatasetError(f"{dataset.path}: source_ignored lists a (frame, actor) that is not in the ground truth")
+    camera_of = {name: i for i, name in enumerate(dataset.rig.camera_names)}
+    kinds = table.column("kind").to_pylist()
+    unknown = sorted(set(kinds) - set(SOURCE_KINDS))
+    if unknown:
+        raise DatasetError(f"{dataset.path}: source_ignored kind {unknown[0]!r} (kinds: {', '.join(SOURCE_KINDS)})")
+    marked = np.zeros((n, c), dtype=np.int8)
+    marked[order[position], [camera_of[name] for name in table.column("camera").to_pylist()]] = [
+        1 + SOURCE_KINDS.index(kind) for kind in kinds]
+    return marked
+
+
 def load_ground_truth(dataset: Dataset) -> GroundTruth:
     """Read the ground truth, projections, visibility and sensor truth of ``dataset`` into a
     :class:`GroundTruth` (vectorised; one pass over each table)."""
@@ -156,6 +195,8 @@ def load_ground_truth(dataset: Dataset) -> GroundTruth:
         causes=np.zeros((n, c), dtype=np.int64),
         detected=np.zeros((n, c), dtype=bool),
         probability=np.zeros((n, c)),
+        source_ignored=_source_ignored(dataset, n, c),
+        causes_known=dataset.causes_known,
     )
     sensor = dataset.table("sensor_truth")
     actor = sensor.column("actor_id").to_numpy()
@@ -179,7 +220,7 @@ def project_tracks(truth: GroundTruth, tracks3d: TrackRows) -> TrackRows:
     starts = np.searchsorted(tracks3d.frame, truth.frames)
     stops = np.searchsorted(tracks3d.frame, truth.frames, side="right")
     for position, (lo, hi) in enumerate(zip(starts, stops, strict=True)):
-        if hi == lo:
+        if hi == lo or not names.size:  # no frame's tracks, or a rig without cameras (a nuScenes import)
             continue
         projection = project_boxes(tracks3d.boxes[lo:hi], truth.rig, truth.egos[position])
         cam, box = np.nonzero(projection.in_view)

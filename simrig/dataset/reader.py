@@ -128,6 +128,57 @@ class Dataset:
     def frame_count(self) -> int:
         return int(self.manifest["frames"])
 
+    @property
+    def source(self) -> dict | None:
+        """How an imported dataset was made (``simrig import``: its ``format``, ``path``, whether it has 3D
+        ground truth and a calibrated rig); ``None`` for a generated one."""
+        return self.manifest.get("source")
+
+    @property
+    def has_3d(self) -> bool:
+        """Whether the dataset holds world-frame 3D ground truth (an import from 2D boxes does not)."""
+        source = self.source
+        return source is None or bool(source.get("ground_truth_3d"))
+
+    @property
+    def has_2d(self) -> bool:
+        """Whether the dataset has cameras to score 2D boxes in (an import of 3D boxes without cameras has not)."""
+        return len(self.rig.cameras) > 0
+
+    @property
+    def causes_known(self) -> bool:
+        """Whether the dataset records why the detector missed each box (generated: yes; imported: unknown)."""
+        return self.source is None
+
+    def source_ignored_table(self) -> pa.Table | None:
+        """The boxes an imported dataset's source marks as not scored (``frame, actor_id, camera, reason``), or
+        ``None`` when the manifest lists no such table."""
+        if "source_ignored" not in self.manifest["files"]:
+            return None
+        return pq.read_table(pa.BufferReader(self._read_file("source_ignored")))
+
+    def sample_tokens(self) -> dict[str, int]:
+        """nuScenes sample token → frame: an imported nuScenes dataset's own tokens, otherwise
+        ``SCENARIO-seedN-FFFFFF`` (:func:`simrig.dataset.tracks_nuscenes.sample_token`)."""
+        from .tracks_nuscenes import sample_token
+
+        if "sample_tokens" in self.manifest["files"]:
+            tokens = json.loads(self._read_file("sample_tokens"))["tokens"]
+            return {token: frame for frame, token in enumerate(tokens)}
+        frames = self.table("ego_poses").column("frame").to_numpy()
+        return {sample_token(self.scenario["name"], self.seed, int(f)): int(f) for f in frames}
+
+    def scene_of_frame(self) -> np.ndarray | None:
+        """``(F,)`` the scene index of every frame of an imported dataset made of several scenes (a nuScenes
+        import: track ids are per scene), or ``None``."""
+        if "sample_tokens" not in self.manifest["files"]:
+            return None
+        scenes = json.loads(self._read_file("sample_tokens")).get("scenes") or []
+        out = np.zeros(self.frame_count, dtype=np.int64)
+        for index, scene in enumerate(scenes):
+            out[scene["first_frame"]:scene["first_frame"] + scene["frames"]] = index
+        return out
+
     @cached_property
     def rig(self) -> Rig:
         return rig_from_dict(json.loads(self._read_file("rig")))
@@ -288,4 +339,10 @@ class Dataset:
             f"visibility {self.manifest.get('visibility', 'not measured')}",
             f"events    {event_text or 'none'}",
         ]
+        source = self.source
+        if source is not None:
+            lines.append(f"source    imported from {source['format']} ({source['path']}): "
+                         f"{'3D and 2D' if self.has_3d and self.has_2d else '3D only' if self.has_3d else '2D only'}"
+                         f" ground truth; rig {'calibrated' if source.get('calibrated_rig') else 'unknown'}; "
+                         "no detections, error causes unknown")
         return "\n".join(lines)

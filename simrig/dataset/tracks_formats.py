@@ -21,7 +21,7 @@ from .ground_truth import project_tracks
 from .tracks_file import TRACKS2D_FILE, TRACKS3D_FILE, TrackRows, TrackSet, read_tracks, tracks_in_memory
 from .tracks_kitti import read_kitti
 from .tracks_motchallenge import read_motchallenge
-from .tracks_nuscenes import read_nuscenes, sample_token
+from .tracks_nuscenes import read_nuscenes
 
 FORMATS = ("simrig", "motchallenge", "kitti", "nuscenes")
 
@@ -59,10 +59,12 @@ def _sniff(file: Path) -> str:
 
 
 def read_tracks_as(path: Path | str, fmt: str | None = None, *, frame_count: int, cameras: tuple[str, ...],
-                   tokens: dict[str, int] | None = None, classes: str = "each") -> TrackSet:
+                   tokens: dict[str, int] | None = None, classes: str = "each",
+                   scenes=None) -> TrackSet:
     """Read and validate the tracks at ``path`` in format ``fmt`` (detected when ``None``) against a dataset of
     ``frame_count`` frames seen by ``cameras``; ``tokens``: its nuScenes sample token → frame; ``classes``: the
-    evaluation's class setting (class-less MOTChallenge files need ``any``)."""
+    evaluation's class setting (class-less MOTChallenge files need ``any``); ``scenes``: ``(F,)`` scene index
+    per frame of a dataset made of several nuScenes scenes (a track id names one track per scene), or ``None``."""
     path = Path(path)
     if fmt is not None and fmt not in FORMATS:
         raise TracksError(f"--format {fmt!r}: tracks formats are {', '.join(FORMATS)}")
@@ -78,7 +80,7 @@ def read_tracks_as(path: Path | str, fmt: str | None = None, *, frame_count: int
     else:
         if not path.is_file():
             raise TracksError(f"{path}: nuScenes tracks are one results .json file")
-        tables = read_nuscenes(path, tokens=tokens or {})
+        tables = read_nuscenes(path, tokens=tokens or {}, scenes=scenes)
     return tracks_in_memory(tables, frame_count=frame_count, cameras=cameras, source=f"{path} ({fmt})")
 
 
@@ -87,9 +89,8 @@ def dataset_tracks(dataset, path: Path | str, fmt: str | None = None) -> tuple[T
     own, or its 3D boxes projected into the cameras as the scorer projects them). Class-less MOTChallenge files
     are read as class-agnostic."""
     truth = dataset.ground_truth
-    tokens = {sample_token(dataset.scenario["name"], dataset.seed, f): int(f) for f in truth.frames}
     tracks = read_tracks_as(path, fmt, frame_count=len(truth.frames), cameras=truth.rig.camera_names,
-                            tokens=tokens, classes="any")
+                            tokens=dataset.sample_tokens(), classes="any", scenes=dataset.scene_of_frame())
     if tracks.tracks3d is None or (tracks.tracks2d is not None and len(tracks.tracks2d)):
         return tracks.tracks3d, tracks.tracks2d
     return tracks.tracks3d, project_tracks(truth, tracks.tracks3d)

@@ -4,9 +4,9 @@ A line is ``frame track_id type truncated occluded alpha left top right bottom h
 rotation_y [score]`` (space-separated, frames from 0, pixel boxes); every line of a file has as many fields as
 its first, 17 or 18 (without a score, every row scores 1). Only the pixel box is read: the 3D fields are in a
 KITTI camera frame simrig's scorer does not take tracks in. Types map to simrig classes as ``simrig export``
-writes them — ``Car`` and ``Van`` → car, ``Truck`` → truck, ``Misc`` → bus, ``Cyclist`` → motorcycle; rows of
-other types (``Pedestrian``, ``Person_sitting``, ``Tram``, ``DontCare``) and rows with id −1 are not tracks of
-a simrig class and are left out.
+writes them — ``Car`` and ``Van`` → car, ``Truck`` → truck, ``Misc`` → bus, ``Cyclist`` → motorcycle,
+``Pedestrian`` → pedestrian; rows of other types (``Person_sitting``, ``Tram``, ``DontCare``) and rows with id −1
+are not tracks of a simrig class and are left out.
 
 Where the files are: one file ``CAMERA.txt``; a folder of them; or the folder written by ``simrig export
 --format kitti`` (``CAMERA/NAME/0000.txt``, next to the ground truth's ``CAMERA/label_02/``). Errors name the
@@ -26,7 +26,8 @@ from .tracks_motchallenge import integer, number, parse_lines
 
 FIELDS = ("frame", "track_id", "type", "truncated", "occluded", "alpha", "left", "top", "right", "bottom",
           "height", "width", "length", "x", "y", "z", "rotation_y", "score")
-CLASS_OF_TYPE = {"Car": "car", "Van": "car", "Truck": "truck", "Misc": "bus", "Cyclist": "motorcycle"}
+CLASS_OF_TYPE = {"Car": "car", "Van": "car", "Truck": "truck", "Misc": "bus", "Cyclist": "motorcycle",
+                 "Pedestrian": "pedestrian"}
 GROUND_TRUTH_FOLDER = "label_02"
 
 

@@ -5,8 +5,9 @@
 ``velocity`` (vx, vy [m/s]), ``tracking_id`` (a string), ``tracking_name``, ``tracking_score``. A dataset's
 sample tokens are ``SCENARIO-seedN-FFFFFF`` (:func:`sample_token`, as ``simrig export --format nuscenes``
 writes them). Track ids that are all integers are kept; otherwise each distinct id gets a number in sorted
-order. Boxes whose ``tracking_name`` is not a simrig class (``pedestrian``, ``bicycle``, ``trailer`` …) are left
-out. Errors name the file and the line of the sample token in it.
+order; on a dataset of several scenes (a nuScenes import) an id names one track per scene, as in the devkit, and
+every (scene, id) gets its own number. Boxes whose ``tracking_name`` is not a simrig class (``trailer`` …) are
+left out. Errors name the file and the line of the sample token in it.
 """
 
 from __future__ import annotations
@@ -34,8 +35,9 @@ def _line_of(text: str, needle: str) -> int:
     return text.count("\n", 0, at) + 1 if at >= 0 else 1
 
 
-def read_nuscenes(path: Path, *, tokens: dict[str, int]) -> dict[str, pa.Table]:
-    """The 3D tracks table of the results JSON at ``path``; ``tokens``: the dataset's sample token → frame."""
+def read_nuscenes(path: Path, *, tokens: dict[str, int], scenes: np.ndarray | None = None) -> dict[str, pa.Table]:
+    """The 3D tracks table of the results JSON at ``path``; ``tokens``: the dataset's sample token → frame;
+    ``scenes``: ``(F,)`` scene index of every frame, or ``None`` for one scene."""
     try:
         text = path.read_text()
         document = json.loads(text)
@@ -73,6 +75,11 @@ def read_nuscenes(path: Path, *, tokens: dict[str, int]) -> dict[str, pa.Table]:
             yaw = float(np.arctan2(2.0 * (w * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz)))
             boxes.append((tokens[token], str(box["tracking_id"]), box["tracking_name"], score,
                           x, y, z, length, width, height, yaw, vx, vy))
+    if scenes is not None:
+        keys = [(int(scenes[b[0]]), b[1]) for b in boxes]
+        number = {key: k for k, key in enumerate(sorted(set(keys)))}
+        rows = [(b[0], number[key], *b[2:]) for b, key in zip(boxes, keys, strict=True)]
+        return {TRACKS3D_FILE: _table(rows, TRACKS3D_SCHEMA)}
     names = sorted({b[1] for b in boxes})
     try:
         number = {name: int(name) for name in names}

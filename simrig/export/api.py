@@ -66,6 +66,12 @@ def export(dataset: Dataset | Path | str, fmt: str, out: Path | str, *, tracks: 
         raise ExportError(f"--format {fmt!r}: known formats are {', '.join(FORMATS)}")
     if not isinstance(dataset, Dataset):
         dataset = Dataset.open(dataset)
+    if fmt == "nuscenes" and not dataset.has_3d:
+        raise ExportError(f"--format nuscenes: dataset {str(dataset.path)!r} holds 2D ground truth only (imported "
+                          "without a rig); export it as motchallenge or kitti")
+    if fmt != "nuscenes" and not dataset.has_2d:
+        raise ExportError(f"--format {fmt}: dataset {str(dataset.path)!r} has no cameras (imported 3D ground truth "
+                          "only); export it as nuscenes")
     out = check_output_path(out, what="--out", inputs=(dataset.path, tracks))
     if out.exists():
         if not overwrite:

@@ -4,10 +4,14 @@ tracks, ``OUT/CAMERA/NAME/0000.txt`` — one sequence, every frame, space-separa
 ``frame track_id type truncated occluded alpha left top right bottom height width length x y z rotation_y
 [score]``
 
+Pixel boxes are written at full precision (17 significant digits), so a file read back (``simrig score``,
+``simrig import``) holds exactly the boxes it was written from; the 3D fields at 4 decimals.
+
 Frames from 0; pixel boxes; 3D in the camera frame (x right, y down, z forward; location = bottom centre of the
 box [m]; rotation_y [rad] about the camera's y axis, 0 facing +x; alpha = rotation_y − atan2(x, z)). Types:
-car → ``Car``, truck → ``Truck``, bus → ``Misc``, motorcycle → ``Cyclist`` (KITTI has no bus or motorcycle
-class). ``truncated`` is the KITTI tracking level from the projected box's fraction outside the image
+car → ``Car``, truck → ``Truck``, bus → ``Misc``, motorcycle and bicycle → ``Cyclist`` (KITTI has no bus or
+motorcycle class; read back, ``Cyclist`` is a motorcycle), pedestrian → ``Pedestrian``. ``truncated`` is the
+KITTI tracking level from the projected box's fraction outside the image
 (0: inside the image, 1: up to 0.5 outside, 2: more); ``occluded`` the KITTI level from the rendered occlusion
 ratio (0: < 0.1, 1: < 0.5, 2: ≥ 0.5, 3: not rendered). Ground truth the evaluation region ignores (as
 ``simrig score`` with the same settings) is written as KITTI's ``DontCare`` (id −1, its pixel box, the other
@@ -26,7 +30,8 @@ import numpy as np
 
 from .api import ExportInput
 
-KITTI_TYPE = {"car": "Car", "truck": "Truck", "bus": "Misc", "motorcycle": "Cyclist"}
+KITTI_TYPE = {"car": "Car", "truck": "Truck", "bus": "Misc", "motorcycle": "Cyclist", "pedestrian": "Pedestrian",
+              "bicycle": "Cyclist"}
 TRUNCATION_LEVELS = (1e-9, 0.5)
 """Upper bounds of KITTI tracking's truncation levels 0 (inside the image) and 1 (partly); above: 2 (heavily)."""
 
@@ -77,19 +82,23 @@ def write(data: ExportInput, out: Path) -> None:
         occlusion = _keyed(visibility, camera, truth.frame[rows], truth.actor_id[rows], "occlusion", np.nan)
         occluded = np.where(np.isnan(occlusion), 3, np.digitize(np.nan_to_num(occlusion), [0.1, 0.5]))
         truncation_level = np.digitize(truncated, TRUNCATION_LEVELS, right=True)
-        dimensions, location, rotation = camera_boxes(truth, rows, c)
-        alpha = _wrap(rotation - np.arctan2(location[:, 0], location[:, 2]))
+        if data.dataset.has_3d:
+            dimensions, location, rotation = camera_boxes(truth, rows, c)
+            alpha = _wrap(rotation - np.arctan2(location[:, 0], location[:, 2]))
+        else:  # imported 2D boxes: KITTI's "unknown" 3D values
+            dimensions, location = np.full((len(rows), 3), -1.0), np.full((len(rows), 3), -1000.0)
+            rotation, alpha = np.full(len(rows), -10.0), np.full(len(rows), -10.0)
         lines = []
         for k, r in enumerate(rows):
             b = truth.boxes2d[r, c]
             if data.ignored[r, c]:
-                lines.append(f"{truth.frame[r]} -1 DontCare -1 -1 -10 {b[0]:.4f} {b[1]:.4f} {b[2]:.4f} {b[3]:.4f} "
+                lines.append(f"{truth.frame[r]} -1 DontCare -1 -1 -10 {b[0]:.17g} {b[1]:.17g} {b[2]:.17g} {b[3]:.17g} "
                              "-1 -1 -1 -1000 -1000 -1000 -10\n")
                 continue
             lines.append(
                 f"{truth.frame[r]} {truth.actor_id[r]} {KITTI_TYPE[truth.label[r]]} {truncation_level[k]} "
                 f"{occluded[k]} "
-                f"{alpha[k]:.6f} {b[0]:.4f} {b[1]:.4f} {b[2]:.4f} {b[3]:.4f} "
+                f"{alpha[k]:.6f} {b[0]:.17g} {b[1]:.17g} {b[2]:.17g} {b[3]:.17g} "
                 + " ".join(f"{v:.4f}" for v in (*dimensions[k], *location[k])) + f" {rotation[k]:.6f}\n")
         folder = out / camera / "label_02"
         folder.mkdir(parents=True)
@@ -102,5 +111,5 @@ def write(data: ExportInput, out: Path) -> None:
             folder.mkdir(parents=True)
             (folder / "0000.txt").write_text("".join(
                 f"{rows2d.frame[k]} {rows2d.track_id[k]} {KITTI_TYPE[rows2d.label[k]]} -1 -1 -10 "
-                f"{rows2d.boxes[k, 0]:.4f} {rows2d.boxes[k, 1]:.4f} {rows2d.boxes[k, 2]:.4f} {rows2d.boxes[k, 3]:.4f} "
+                + " ".join(f"{v:.17g}" for v in rows2d.boxes[k]) + " "
                 f"-1 -1 -1 -1000 -1000 -1000 -10 {rows2d.score[k]:.6f}\n" for k in t))

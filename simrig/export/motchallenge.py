@@ -9,7 +9,9 @@ overall one (class-agnostic settings, ``classes = "any"``: one sequence per came
 pixel boxes; the class column is 1 (``pedestrian``, the one class TrackEval's MOT reader evaluates; the real
 class is in the sequence name) on both sides, and 8 (``distractor``) for ground truth the evaluation region
 ignores: TrackEval's preprocessing then removes the tracker boxes matched to it and the box itself, exactly
-as ``simrig score`` does. Evaluate with
+as ``simrig score`` does; ground truth ignored only as not evaluated (an imported MOTChallenge row of another
+class) is written with ``consider`` 0, which TrackEval matches but neither scores nor lets remove a tracker box.
+Evaluate with
 ``trackeval.datasets.MotChallenge2DBox({"GT_FOLDER": OUT/gt/mot_challenge, "TRACKERS_FOLDER":
 OUT/trackers/mot_challenge, "BENCHMARK": "SIMRIG", "SPLIT_TO_EVAL": "test"})``.
 """
@@ -20,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..dataset.evaluation import KEEPS_MATCHES
 from .api import ExportInput
 
 BENCHMARK, SPLIT = "SIMRIG", "test"
@@ -56,11 +59,14 @@ def write(data: ExportInput, out: Path) -> None:
             name = f"{camera}-{label}"
             sequences.append(name)
             g = gt_rows if agnostic else gt_rows[truth.label[gt_rows] == label]
-            classes = np.where(data.ignored[g, c] != 0, DISTRACTOR_CLASS, EVALUATED_CLASS)
+            rules = data.ignored[g, c]
+            keeps_match = (rules != 0) & ((rules & ~KEEPS_MATCHES) == 0)  # unevaluated: consider 0, class 1
+            classes = np.where((rules != 0) & ~keeps_match, DISTRACTOR_CLASS, EVALUATED_CLASS)
             folder = gt_root / f"{BENCHMARK}-{SPLIT}" / name
             (folder / "gt").mkdir(parents=True)
             (folder / "gt" / "gt.txt").write_text(
-                _lines(truth.frame[g], truth.actor_id[g], truth.boxes2d[g, c], np.ones(len(g)), classes, 1))
+                _lines(truth.frame[g], truth.actor_id[g], truth.boxes2d[g, c], (~keeps_match).astype(float), classes,
+                       1))
             (folder / "seqinfo.ini").write_text(
                 f"[Sequence]\nname={name}\nseqLength={len(truth.frames)}\nframeRate={frame_rate:g}\n"
                 f"imWidth={cam.width}\nimHeight={cam.height}\nimExt=.png\n")

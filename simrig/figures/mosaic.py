@@ -75,6 +75,9 @@ def _camera_images(dataset: Dataset, state: GroundTruthFrame) -> dict[str, np.nd
 
         names = dataset.rig.camera_names
         return {name: np.asarray(Image.open(images / name / f"{state.frame:06d}.png")) for name in names}
+    if not dataset.has_3d:  # imported 2D boxes: no world to render; a blank frame of the camera's size
+        return {camera.name: np.full((camera.height, camera.width, 3), 235, dtype=np.uint8)
+                for camera in dataset.rig.cameras}
     from simrig.render.scene import RigScene
 
     scene = RigScene(dataset.road_markings())
@@ -155,14 +158,15 @@ def render_mosaic(dataset_path: Path | str, frame: int, out: Path | str, tracks:
     images = _camera_images(dataset, state)
     detections = _detections(dataset, frame)
     tracks2d, tracks3d = _frame_tracks(dataset, tracks, frame)
-    layout = _layout(dataset.rig.camera_names)
-    rows, columns = len(layout), max(len(row) for row in layout)
-    camera = dataset.rig.cameras[0]
-    aspect = camera.height / camera.width
+    # an imported dataset may have no cameras (3D only) or no 3D ground truth (2D only): draw what it has
+    layout = _layout(dataset.rig.camera_names) if dataset.has_2d else []
+    rows, columns = max(len(layout), 1), max((len(row) for row in layout), default=0)
+    aspect = dataset.rig.cameras[0].height / dataset.rig.cameras[0].width if columns else 1.0
     panel = 4.2 if columns > 1 else 8.0  # [in] width of one camera image
     height = max(5.0, panel * aspect * rows + 0.8)
-    figure = plt.figure(figsize=(panel * columns + height, height), dpi=110)
-    grid = figure.add_gridspec(rows, columns + 1, width_ratios=[panel] * columns + [height])
+    bev = 1 if dataset.has_3d else 0
+    figure = plt.figure(figsize=(panel * columns + height * bev, height), dpi=110)
+    grid = figure.add_gridspec(rows, columns + bev, width_ratios=[panel] * columns + [height] * bev)
     for r, row in enumerate(layout):
         for c, name in enumerate(row):
             axis = figure.add_subplot(grid[r, c])
@@ -183,7 +187,8 @@ def render_mosaic(dataset_path: Path | str, frame: int, out: Path | str, tracks:
             axis.set_title(f"{name}: {int(truth.in_view.sum())} in view, {len(detections.get(name, []))} detections"
                            f"{tracked}", fontsize=8)
             axis.set_axis_off()
-    _draw_bev(figure.add_subplot(grid[:, columns]), dataset, state, detections, tracks3d)
+    if bev:
+        _draw_bev(figure.add_subplot(grid[:, columns]), dataset, state, detections, tracks3d)
     scenario = dataset.scenario["name"]
     figure.suptitle(f"{scenario}, seed {dataset.seed}, frame {frame} (t = {state.timestamp:.1f} s); solid: ground "
                     "truth, dashed: detections (red: false positives)"

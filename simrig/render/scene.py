@@ -43,6 +43,8 @@ CLASS_COLOURS = {
     ActorClass.TRUCK: (0.85, 0.55, 0.15),
     ActorClass.BUS: (0.80, 0.20, 0.20),
     ActorClass.MOTORCYCLE: (0.20, 0.65, 0.35),
+    ActorClass.PEDESTRIAN: (0.60, 0.30, 0.70),
+    ActorClass.BICYCLE: (0.15, 0.60, 0.65),
 }
 """Base colour (RGB in [0, 1]) of each class in colour renders."""
 

@@ -21,6 +21,8 @@ PART_FRACTIONS: dict[ActorClass, np.ndarray] = {
     ActorClass.TRUCK: np.array([[0.28, 0.50, 1.00, 0.00, 0.80], [-0.50, 0.26, 1.00, 0.00, 1.00]]),  # cab, cargo
     ActorClass.BUS: np.array([[-0.42, 0.42, 0.92, 0.00, 0.12], [-0.50, 0.50, 1.00, 0.12, 1.00]]),  # axles, body
     ActorClass.MOTORCYCLE: np.array([[-0.50, 0.50, 1.00, 0.00, 0.50], [-0.25, 0.10, 0.70, 0.50, 1.00]]),  # bike, rider
+    ActorClass.PEDESTRIAN: np.array([[-0.30, 0.30, 0.60, 0.00, 0.50], [-0.50, 0.50, 1.00, 0.50, 1.00]]),  # legs, torso
+    ActorClass.BICYCLE: np.array([[-0.50, 0.50, 1.00, 0.00, 0.45], [-0.20, 0.10, 0.70, 0.45, 1.00]]),  # bike, rider
 }
 PARTS_PER_ACTOR = 2
 

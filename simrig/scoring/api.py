@@ -9,7 +9,6 @@ import pyarrow as pa
 
 from simrig.dataset.tracks_file import TrackSet
 from simrig.dataset.tracks_formats import read_tracks_as
-from simrig.dataset.tracks_nuscenes import sample_token
 from simrig.scenarios.evaluation_schema import EvaluationConfig
 from simrig.scoring.results import METRICS_2D, METRICS_3D, ScoreReport
 
@@ -59,29 +58,39 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     config = evaluation_of(dataset.scenario, evaluation)
     truth = dataset.ground_truth if truth is None else truth
     if not isinstance(tracks, TrackSet):
-        tokens = {sample_token(dataset.scenario["name"], dataset.seed, f): int(f) for f in truth.frames}
         tracks = read_tracks_as(tracks, fmt, frame_count=len(truth.frames), cameras=truth.rig.camera_names,
-                                tokens=tokens, classes=config.classes)
+                                tokens=dataset.sample_tokens(), classes=config.classes,
+                                scenes=dataset.scene_of_frame())
+    has_2d_tracks = tracks.tracks2d is not None and len(tracks.tracks2d) > 0
+    if not dataset.has_3d and not has_2d_tracks and tracks.tracks3d is not None and len(tracks.tracks3d):
+        raise TracksError(f"{tracks.source}: 3D tracks, but dataset {str(dataset.path)!r} holds 2D ground truth "
+                          "only (imported without a rig): score 2D tracks on it")
+    if not dataset.has_2d and has_2d_tracks:
+        raise TracksError(f"{tracks.source}: 2D tracks, but dataset {str(dataset.path)!r} has no cameras "
+                          "(imported 3D ground truth only): score 3D tracks on it")
     lookback = int(round(lookback_s * float(dataset.scenario["frame_rate_hz"])))
     errors = []
-    metrics3d = None
-    if tracks.tracks3d is not None and camera is None:
+    metrics3d = metrics2d = None
+    if tracks.tracks3d is not None and camera is None and dataset.has_3d:
         metrics3d, errors3d = _score_3d(truth, tracks, lookback)
         errors.append(errors3d)
-    if tracks.tracks2d is not None and len(tracks.tracks2d):
-        rows2d, source = tracks.tracks2d, "tracks2d"
-    elif tracks.tracks3d is not None:
-        rows2d, source = project_tracks(truth, tracks.tracks3d), "projected 3D tracks"
-    else:
-        rows2d, source = tracks.tracks2d, "tracks2d"
-    metrics2d, errors2d = _score_2d(truth, rows2d, lookback, camera, config)
-    metrics2d["source"] = source
-    errors.append(errors2d)
+    if dataset.has_2d:
+        if has_2d_tracks:
+            rows2d, source = tracks.tracks2d, "tracks2d"
+        elif tracks.tracks3d is not None:
+            rows2d, source = project_tracks(truth, tracks.tracks3d), "projected 3D tracks"
+        else:
+            rows2d, source = tracks.tracks2d, "tracks2d"
+        metrics2d, errors2d = _score_2d(truth, rows2d, lookback, camera, config)
+        metrics2d["source"] = source
+        errors.append(errors2d)
+    ground_truth = {} if dataset.source is None else {
+        "ground_truth": "2d only" if not dataset.has_3d else "3d only" if not dataset.has_2d else "2d and 3d"}
     return ScoreReport(
         dataset=str(dataset.path), tracks=tracks.source, scenario=dataset.scenario["name"], seed=dataset.seed,
         metrics3d=metrics3d, metrics2d=metrics2d,
         errors=pa.concat_tables(errors) if errors else ERRORS_SCHEMA.empty_table(),
-        settings={"lookback_s": lookback_s, **({"camera": camera} if camera is not None else {}),
+        settings={"lookback_s": lookback_s, **({"camera": camera} if camera is not None else {}), **ground_truth,
                   "evaluation": config.model_dump(mode="json")},
     )
 

@@ -3,7 +3,8 @@
 Causes are the sensor's (:class:`~simrig.causes.Cause` names: ``occluded``, ``truncated``, ``far``,
 ``scheduled_occlusion``, ``scheduled_miss``, ``blackout``, ``dropped_frame``, ``out_of_view``, …) plus
 ``handover`` (the set of cameras that see the actor changed) and ``none`` (nothing recorded: the detector
-delivered the actor, or missed it at random, and the tracker lost it).
+delivered the actor, or missed it at random, and the tracker lost it). On imported ground truth, which records
+no sensor, every error's cause is ``unknown`` (never ``none``: nobody knows that nothing affected it).
 
 * FN at (frame, actor[, camera]): why the detector did not deliver it there — in 2D that camera's causes
   where it missed the actor; in 3D, if no camera detected it, the union over the cameras that had it in
@@ -32,7 +33,8 @@ IGNORED_KIND = "IGN"
 scored and why."""
 HANDOVER = "handover"
 NONE = "none"
-ATTRIBUTION_CAUSES = (*[name for name in CAUSE_NAMES if name != "clutter"], HANDOVER, NONE)
+UNKNOWN = "unknown"
+ATTRIBUTION_CAUSES = (*[name for name in CAUSE_NAMES if name != "clutter"], HANDOVER, NONE, UNKNOWN)
 """Every tag an error can carry, in reporting order."""
 _HANDOVER_BIT = 1 << 62
 ERRORS_SCHEMA = pa.schema([
@@ -75,11 +77,12 @@ class Attributor:
         previous = np.concatenate([none, events.switches[:, 3], np.full(len(events.fragmentations), -1)])
         masks = np.concatenate([fn_masks, np.array(switch_masks + frag_masks, dtype=np.int64)])
         n = len(kinds)
+        causes = ([cause_names(int(mask)) for mask in masks] if truth.causes_known else [[UNKNOWN]] * n)
         return pa.table({
             "dimension": [dimension] * n, "kind": kinds, "frame": frames.astype(np.int32),
             "camera": [camera] * n, "class": [label] * n, "actor_id": actors.astype(np.int64),
             "track_id": tracks.astype(np.int64), "previous_track_id": previous.astype(np.int64),
-            "causes": [cause_names(int(mask)) for mask in masks],
+            "causes": causes,
         }, schema=ERRORS_SCHEMA)
 
     def tag_ignored(self, label: str, camera: str, misses: np.ndarray, rules: np.ndarray) -> pa.Table:
@@ -90,7 +93,7 @@ class Attributor:
         rows = self.truth.rows_of(misses[:, 0], misses[:, 1])
         n = len(rows)
         causes = [[f"{IGNORED}_{name}" for name in rule_names(int(rule))]
-                  + ([] if mask == 0 else cause_names(int(mask)))
+                  + ([] if mask == 0 or not self.truth.causes_known else cause_names(int(mask)))
                   for rule, mask in zip(rules[rows], self.masks[rows], strict=True)]
         return pa.table({
             "dimension": ["2d"] * n, "kind": [IGNORED_KIND] * n, "frame": misses[:, 0].astype(np.int32),

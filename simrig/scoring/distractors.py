@@ -30,11 +30,15 @@ def preprocessing_matches(seq: Sequence) -> np.ndarray:
     return np.sort(np.concatenate(matched))
 
 
-def split_distractors(seq: Sequence, ignored: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def split_distractors(seq: Sequence, ignored: np.ndarray, removes: np.ndarray | None = None
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For ``seq`` built on all ground truth and ``ignored`` ``(n,)`` its ignored gt rows: (gt rows to keep,
-    tracker rows to keep, ignored gt rows that no tracker box was matched to), all as row indices of ``seq``."""
+    tracker rows to keep, ignored gt rows that no tracker box was matched to), all as row indices of ``seq``.
+    ``removes`` ``(n,)``: the ignored rows whose matched tracker box is removed (default: all of them; a row
+    the source does not evaluate keeps its match, a false positive, as TrackEval keeps a box matched to ground
+    truth of another class)."""
     matched = preprocessing_matches(seq)
-    on_ignored = ignored[seq.pair_gt[matched]]
+    on_ignored = (ignored if removes is None else removes & ignored)[seq.pair_gt[matched]]
     keep_tracker = np.ones(seq.num_tracker_dets, dtype=bool)
     keep_tracker[seq.pair_tracker[matched[on_ignored]]] = False
     tracked = np.zeros(seq.num_gt_dets, dtype=bool)

@@ -21,6 +21,7 @@ import numpy as np
 from simrig.dataset.tracks_file import TrackRows
 from simrig.scenarios.evaluation_schema import NUSCENES_CLASS_RANGE_M
 
+from ..dataset.evaluation import KEEPS_MATCHES
 from ..dataset.ground_truth import GroundTruth
 from ..types import ActorClass
 from .bev import BevSequence, bev_sequence
@@ -38,8 +39,10 @@ def camera_sequences(truth: GroundTruth, tracks2d: TrackRows, cameras: tuple[str
     """One sequence per (camera, class) for every camera of the rig (or of ``cameras``) and every class present
     on either side; with ``classes="any"`` one per camera, every class together (label ``any``).
 
-    ``ignored``: ``(R, C)`` truthy where a ground-truth box is ignored; such boxes are removed together with the
-    tracker boxes matched to them, as TrackEval's preprocessing does (:mod:`simrig.scoring.distractors`)."""
+    ``ignored``: ``(R, C)`` :class:`~simrig.dataset.evaluation.IgnoreRule` bits, non-zero where a ground-truth
+    box is ignored; such boxes are removed together with the tracker boxes matched to them, as TrackEval's
+    preprocessing does (:mod:`simrig.scoring.distractors`), except that a box ignored only by a rule in
+    :data:`~simrig.dataset.evaluation.KEEPS_MATCHES` leaves its matched tracker box in place."""
     sequences = []
     for c, camera in enumerate(truth.rig.camera_names):
         if cameras is not None and camera not in cameras:
@@ -55,7 +58,8 @@ def camera_sequences(truth: GroundTruth, tracks2d: TrackRows, cameras: tuple[str
         for label, g, t in groups:
             seq = _sequence(truth, tracks2d, camera, c, label, g, t)
             if ignored is not None and np.any(ignored[g, c]):
-                keep_g, keep_t, untracked = split_distractors(seq, np.asarray(ignored[g, c], dtype=bool))
+                rules = np.asarray(ignored[g, c], dtype=np.int64)
+                keep_g, keep_t, untracked = split_distractors(seq, rules != 0, removes=(rules & ~KEEPS_MATCHES) != 0)
                 seq = replace(_sequence(truth, tracks2d, camera, c, label, g[keep_g], t[keep_t]),
                               ignored_misses=np.column_stack([truth.frame[g[untracked]],
                                                               truth.actor_id[g[untracked]]]).astype(np.int64))

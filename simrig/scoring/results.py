@@ -19,8 +19,10 @@ METRICS_3D = ("AMOTA", "AMOTP", "MOTAR", "MOTA", "MOTP", "RECALL", "IDS", "FRAG"
 METRICS_2D = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDSW", "Frag", "MT", "PT", "ML", "IDF1", "IDP",
               "IDR", "CLR_TP", "CLR_FN", "CLR_FP")
 """2D metrics, TrackEval style (MOTP: mean IoU of matches)."""
-IGNORED_COLUMNS = ("boxes", "ignored", "range", "height", "visibility", "truncation", "delivered")
-"""Per camera: ground-truth boxes in view, how many are ignored, and by each rule (a box may break several);
+IGNORED_COLUMNS = ("boxes", "ignored", "range", "height", "visibility", "truncation", "source", "unevaluated",
+                   "delivered")
+"""Per camera: ground-truth boxes in view, how many are ignored, and by each rule (a box may break several;
+``source``: a distractor and ``unevaluated``: not evaluated, as an imported dataset's source marks it);
 ``delivered``: the scored (not ignored) boxes the camera's detector reported."""
 COUNT_METRICS = {"IDS", "FRAG", "MT", "ML", "TP", "FP", "FN", "IDSW", "Frag", "PT", "CLR_TP", "CLR_FN", "CLR_FP"}
 
@@ -29,8 +31,9 @@ COUNT_METRICS = {"IDS", "FRAG", "MT", "ML", "TP", "FP", "FN", "IDSW", "Frag", "P
 class ScoreReport:
     """Scores of one tracker output on one dataset.
 
-    metrics3d: ``{"overall": {...}, "per_class": {class: {...}}}`` or ``None`` (no 3D tracks).
-    metrics2d: ``{"overall": ..., "per_class": ..., "per_camera": ...}``, ``ground_truth`` (``overall`` and
+    metrics3d: ``{"overall": {...}, "per_class": {class: {...}}}`` or ``None`` (no 3D tracks, or a dataset
+    with 2D ground truth only). metrics2d (``None`` on a dataset without cameras): ``{"overall": ...,
+    "per_class": ..., "per_camera": ...}``, ``ground_truth`` (``overall`` and
     ``per_camera``: boxes in view, ignored, ignored by each rule, and ``delivered``: scored boxes the detector
     reported) and ``source`` (``tracks2d`` or
     ``projected 3D tracks``). errors: one row per error (:data:`~simrig.scoring.attribution.ERRORS_SCHEMA`).
@@ -41,7 +44,7 @@ class ScoreReport:
     scenario: str
     seed: int
     metrics3d: dict | None
-    metrics2d: dict
+    metrics2d: dict | None
     errors: pa.Table
     settings: dict = field(default_factory=dict)
 
@@ -64,8 +67,13 @@ class ScoreReport:
         """The readable summary ``simrig score`` prints."""
         lines = [f"dataset   {self.dataset} ({self.scenario}, seed {self.seed})", f"tracks    {self.tracks}"]
         if self.metrics3d is not None:
-            lines += ["", "3D (BEV centre distance < 2 m; class ranges 50 m, motorcycle 40 m)"]
+            lines += ["", "3D (BEV centre distance < 2 m; class ranges 50 m, motorcycle, pedestrian, bicycle 40 m)"]
             lines += _grid(METRICS_3D, {"overall": self.metrics3d["overall"], **self.metrics3d["per_class"]})
+        elif self.settings.get("ground_truth") == "2d only":
+            lines += ["", "3D: not scored (the dataset's ground truth is 2D only)"]
+        if self.metrics2d is None:
+            lines += ["", "2D: not scored (the dataset has no cameras)"]
+            return "\n".join(lines + _error_lines(self.errors))
         lines += ["", f"2D per camera (IoU; {self.metrics2d['source']})"]
         rows = {"overall": self.metrics2d["overall"], **self.metrics2d["per_camera"],
                 **{f"class {name}": value for name, value in self.metrics2d["per_class"].items()}}
@@ -76,15 +84,21 @@ class ScoreReport:
                       f"{_evaluation_text(self.settings.get('evaluation'))}); delivered: scored boxes the "
                       "detector reported"]
             lines += _grid(IGNORED_COLUMNS, {"overall": truth["overall"], **truth["per_camera"]})
-        for dimension, table in errors_by_cause(self.errors).items():
-            lines += ["", f"{dimension.upper()} errors by cause (an error with several causes counts in each)"]
-            lines.append(f"  {'cause':<22}{'FN':>8}{'IDS':>8}{'FRAG':>8}")
-            for cause, counts in table.items():
-                if cause == IGNORED:
-                    lines.append(f"  {'ignored (not errors)':<22}{counts['FN']:>8}{'-':>8}{'-':>8}")
-                    continue
-                lines.append(f"  {cause:<22}{counts['FN']:>8}{counts['IDS']:>8}{counts['FRAG']:>8}")
-        return "\n".join(lines)
+        return "\n".join(lines + _error_lines(self.errors))
+
+
+def _error_lines(errors: pa.Table) -> list[str]:
+    """The errors-by-cause tables of the readable summary."""
+    lines = []
+    for dimension, table in errors_by_cause(errors).items():
+        lines += ["", f"{dimension.upper()} errors by cause (an error with several causes counts in each)"]
+        lines.append(f"  {'cause':<22}{'FN':>8}{'IDS':>8}{'FRAG':>8}")
+        for cause, counts in table.items():
+            if cause == IGNORED:
+                lines.append(f"  {'ignored (not errors)':<22}{counts['FN']:>8}{'-':>8}{'-':>8}")
+                continue
+            lines.append(f"  {cause:<22}{counts['FN']:>8}{counts['IDS']:>8}{counts['FRAG']:>8}")
+    return lines
 
 
 def _evaluation_text(config: dict | None) -> str:
