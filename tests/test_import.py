@@ -204,10 +204,10 @@ def test_nuscenes_export_loads_in_the_devkit(small_dataset, saga_tracks, tmp_pat
         assert ours["overall"][name] == pytest.approx(theirs[name.lower()], abs=1e-9), name
     assert theirs["tp"] > 50
     # saga loses a car for a frame or two and finds it again: the devkit fills such a gap by interpolation (a
-    # match), simrig scores the frame as given (a miss) — the same ground truth in range, more misses here
+    # match, or a false positive where the gap-filling box lies off the car), simrig scores the frames as given,
+    # and the best-MOTA threshold each side picks may differ: only the ground truth in range is the same
     theirs, ours = devkit(out / "saga.json"), score(small_dataset, out / "saga.json").metrics3d["overall"]
     assert theirs["tp"] + theirs["fn"] == ours["TP"] + ours["FN"]
-    assert theirs["fn"] <= ours["FN"] and theirs["fp"] == ours["FP"] and theirs["ids"] == ours["IDS"]
 
 
 # ----------------------------------------------------------------------------------------------- unknowns
