@@ -74,8 +74,8 @@ def calibrate(preset: str, seeds: list[int], frames: int, visibility: bool, roun
     target = PUBLISHED[preset]
     keys = (("depth_sigma_per_m", "lateral_sigma_m"), ("size_sigma",), ("yaw_sigma_deg",), ("velocity_sigma_mps",))
     for round_ in range(rounds):  # the last round only measures
-        values = [statistics.fmean(column) for column in zip(*measured(preset, seeds, frames, visibility, box3d, worlds),
-                                                              strict=True)]
+        rows = measured(preset, seeds, frames, visibility, box3d, worlds)
+        values = [statistics.fmean(column) for column in zip(*rows, strict=True)]
         print(f"round {round_}: " + "  ".join(f"{n} {v:.3f} ({t:.3f})" for n, v, t in zip(METRICS, values, target,
                                                                                          strict=True)), flush=True)
         if round_ == rounds - 1:
@@ -124,10 +124,10 @@ def main() -> int:
                          f"{', '.join(f'{v:.3f}' for v in values)} | {off * 100:+.1f}% | "
                          f"{'yes' if abs(off) <= 0.10 else 'NO'} |")
         print("\n".join(lines[-4:]), flush=True)
-    lines += ["", "The presets were calibrated on seeds 0–5 at 300 frames (`--calibrate NAME --seeds 0 1 2 3 4 5 --frames "
-              "300 --rounds 3 --worlds DIR`, three rounds from the previous magnitudes), not on the seeds a check uses. "
-              "mAOE varies most between runs (a few rare-class objects with persistent yaw errors weigh as much as all "
-              "cars in the class mean), so the check averages six seeds."]
+    lines += ["", "The presets were calibrated on seeds 0–5 at 300 frames (`--calibrate NAME --seeds 0 1 2 3 4 5 "
+              "--frames 300 --rounds 3 --worlds DIR`, three rounds from the previous magnitudes), not on the seeds a "
+              "check uses. mAOE varies most between runs (a few rare-class objects with persistent yaw errors weigh "
+              "as much as all cars in the class mean), so the check averages six seeds."]
     text = "\n".join(lines) + "\n"
     REPORT.parent.mkdir(parents=True, exist_ok=True)
     REPORT.write_text(text)
