@@ -156,11 +156,16 @@ def test_fit_of_a_nuscenes_log_gives_back_the_errors_it_was_drawn_with(log, tmp_
     assert load_scenario(scenario).sensor.box3d.correlation_time_s == fitted["box3d"]["correlation_time_s"]
 
 
-def test_the_dataset_and_its_exported_tables_are_the_same_ground_truth(log, tmp_path):
+def test_the_dataset_its_exported_tables_and_their_import_are_the_same_ground_truth(log, tmp_path):
     dataset, tables, detections = log
     from simrig.detector.fit_nuscenes import fit_nuscenes
 
-    assert fit_nuscenes(detections, dataset, cameras=3).sensor == fit_nuscenes(detections, tables, cameras=3).sensor
+    assert main(["import", "--format", "nuscenes", str(tables), "--out", str(tmp_path / "imported")]) == 0
+    fitted = fit_nuscenes(detections, tables, cameras=3).sensor
+    assert fit_nuscenes(detections, dataset, cameras=3).sensor == fitted
+    assert fit_nuscenes(detections, tmp_path / "imported", cameras=3).sensor == fitted
+    assert fitted["clutter"]["rate_per_frame"] == pytest.approx(2 * fit_nuscenes(detections, tables).sensor[
+        "clutter"]["rate_per_frame"], abs=1e-6)  # per sample ÷ 3 cameras against ÷ 6
 
 
 @pytest.mark.parametrize("case", ["unknown token", "neither", "truth with a dataset", "no truth"])
