@@ -37,6 +37,18 @@ def _line_of(text: str, needle: str) -> int:
     return text.count("\n", 0, at) + 1 if at >= 0 else 1
 
 
+class _Where:
+    """``FILE:LINE`` of a sample token, found only when an error is written (a detection-results JSON may
+    hold thousands of samples in hundreds of megabytes)."""
+
+    def __init__(self, path: Path, text: str, token: str):
+        self.path, self.text, self.token = path, text, token
+
+    def __str__(self) -> str:
+        needle = '"' + self.token + '"'
+        return f"{self.path}:{_line_of(self.text, needle)}"
+
+
 def read_results(path: Path, *, tokens: dict[str, int], kind: str = "tracking",
                  error: type[SimrigError] = TracksError) -> tuple[list[tuple], list[int]]:
     """The boxes of the nuScenes ``kind`` (``tracking`` or ``detection``) results JSON at ``path``: rows
@@ -58,17 +70,17 @@ def read_results(path: Path, *, tokens: dict[str, int], kind: str = "tracking",
     keys = (*BOX_KEYS[:4], *(("tracking_id",) if kind == "tracking" else ()), f"{kind}_name", f"{kind}_score")
     boxes, frames = [], []
     for token, items in results.items():
-        line = _line_of(text, f'"{token}"')
+        where = _Where(path, text, token)
         if token not in tokens:
-            raise error(f"{path}:{line}: unknown sample token {token!r} (this dataset's are {known[0]} … "
+            raise error(f"{where}: unknown sample token {token!r} (this dataset's are {known[0]} … "
                         f"{known[-1]})")
         if not isinstance(items, list):
-            raise error(f"{path}:{line}: sample {token!r} must map to a list of boxes")
+            raise error(f"{where}: sample {token!r} must map to a list of boxes")
         frames.append(tokens[token])
         for k, box in enumerate(items):
             missing = [key for key in keys if not isinstance(box, dict) or key not in box]
             if missing:
-                raise error(f"{path}:{line}: sample {token!r}, box {k}: missing {', '.join(missing)}")
+                raise error(f"{where}: sample {token!r}, box {k}: missing {', '.join(missing)}")
             if box[f"{kind}_name"] not in CLASSES:
                 continue
             try:
@@ -78,7 +90,7 @@ def read_results(path: Path, *, tokens: dict[str, int], kind: str = "tracking",
                 vx, vy = (float(v) for v in box["velocity"])
                 score = float(box[f"{kind}_score"])
             except (TypeError, ValueError) as problem:
-                raise error(f"{path}:{line}: sample {token!r}, box {k}: {problem} (translation 3, size 3, "
+                raise error(f"{where}: sample {token!r}, box {k}: {problem} (translation 3, size 3, "
                             f"rotation 4, velocity 2 numbers, {kind}_score a number)") from None
             yaw = float(np.arctan2(2.0 * (w * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz)))
             boxes.append((tokens[token], str(box.get("tracking_id", "")), box[f"{kind}_name"], score,
