@@ -2,12 +2,14 @@
 
 ``{"meta": {...}, "results": {sample_token: [box, …]}}``; per box ``translation`` (world-frame centre [m]),
 ``size`` (width, length, height [m]), ``rotation`` (unit quaternion w, x, y, z; its yaw about +z is kept),
-``velocity`` (vx, vy [m/s]), ``tracking_id`` (a string), ``tracking_name``, ``tracking_score``. A dataset's
-sample tokens are ``SCENARIO-seedN-FFFFFF`` (:func:`sample_token`, as ``simrig export --format nuscenes``
-writes them). Track ids that are all integers are kept; otherwise each distinct id gets a number in sorted
-order; on a dataset of several scenes (a nuScenes import) an id names one track per scene, as in the devkit, and
-every (scene, id) gets its own number. Boxes whose ``tracking_name`` is not a simrig class (``trailer`` …) are
-left out. Errors name the file and the line of the sample token in it.
+``velocity`` (vx, vy [m/s]), ``tracking_id`` (a string), ``tracking_name``, ``tracking_score``. A
+detection-results JSON (read by :func:`read_results` for ``simrig detector fit``) has ``detection_name`` and
+``detection_score`` instead and no id. A dataset's sample tokens are ``SCENARIO-seedN-FFFFFF``
+(:func:`sample_token`, as ``simrig export --format nuscenes`` writes them). Track ids that are all integers are
+kept; otherwise each distinct id gets a number in sorted order; on a dataset of several scenes (a nuScenes
+import) an id names one track per scene, as in the devkit, and every (scene, id) gets its own number. Boxes
+whose ``tracking_name`` is not a simrig class (``trailer`` …) are left out. Errors name the file and the line of
+the sample token in it.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from simrig.errors import TracksError
+from simrig.errors import SimrigError, TracksError
 
 from .tracks_file import CLASSES, TRACKS3D_FILE, TRACKS3D_SCHEMA, _table
 
@@ -35,46 +37,71 @@ def _line_of(text: str, needle: str) -> int:
     return text.count("\n", 0, at) + 1 if at >= 0 else 1
 
 
-def read_nuscenes(path: Path, *, tokens: dict[str, int], scenes: np.ndarray | None = None) -> dict[str, pa.Table]:
-    """The 3D tracks table of the results JSON at ``path``; ``tokens``: the dataset's sample token → frame;
-    ``scenes``: ``(F,)`` scene index of every frame, or ``None`` for one scene."""
+class _Where:
+    """``FILE:LINE`` of a sample token, found only when an error is written (a detection-results JSON may
+    hold thousands of samples in hundreds of megabytes)."""
+
+    def __init__(self, path: Path, text: str, token: str):
+        self.path, self.text, self.token = path, text, token
+
+    def __str__(self) -> str:
+        needle = '"' + self.token + '"'
+        return f"{self.path}:{_line_of(self.text, needle)}"
+
+
+def read_results(path: Path, *, tokens: dict[str, int], kind: str = "tracking",
+                 error: type[SimrigError] = TracksError) -> tuple[list[tuple], list[int]]:
+    """The boxes of the nuScenes ``kind`` (``tracking`` or ``detection``) results JSON at ``path``: rows
+    ``(frame, id, name, score, x, y, z, length, width, height, yaw, vx, vy)`` (``id`` the ``tracking_id``; ""
+    for detections) of the boxes whose ``{kind}_name`` is a simrig class, and the frames the file has a key
+    for (empty lists count). ``tokens``: the dataset's sample token → frame. Errors (``error``) name the file
+    and the line of the sample token."""
     try:
         text = path.read_text()
         document = json.loads(text)
-    except (OSError, UnicodeDecodeError) as error:
-        raise TracksError(f"{path}: cannot be read as text ({error})") from None
-    except json.JSONDecodeError as error:
-        raise TracksError(f"{path}:{error.lineno}: not JSON ({error.msg})") from None
+    except (OSError, UnicodeDecodeError) as problem:
+        raise error(f"{path}: cannot be read as text ({problem})") from None
+    except json.JSONDecodeError as problem:
+        raise error(f"{path}:{problem.lineno}: not JSON ({problem.msg})") from None
     results = document.get("results") if isinstance(document, dict) else None
     if not isinstance(results, dict):
-        raise TracksError(f"{path}:1: no \"results\" mapping of sample tokens to boxes (nuScenes tracking results)")
+        raise error(f"{path}:1: no \"results\" mapping of sample tokens to boxes (nuScenes {kind} results)")
     known = sorted(tokens, key=tokens.get)
-    boxes = []
+    keys = (*BOX_KEYS[:4], *(("tracking_id",) if kind == "tracking" else ()), f"{kind}_name", f"{kind}_score")
+    boxes, frames = [], []
     for token, items in results.items():
-        line = _line_of(text, f'"{token}"')
+        where = _Where(path, text, token)
         if token not in tokens:
-            raise TracksError(f"{path}:{line}: unknown sample token {token!r} (this dataset's are {known[0]} … "
-                              f"{known[-1]})")
+            raise error(f"{where}: unknown sample token {token!r} (this dataset's are {known[0]} … "
+                        f"{known[-1]})")
         if not isinstance(items, list):
-            raise TracksError(f"{path}:{line}: sample {token!r} must map to a list of boxes")
+            raise error(f"{where}: sample {token!r} must map to a list of boxes")
+        frames.append(tokens[token])
         for k, box in enumerate(items):
-            missing = [key for key in BOX_KEYS if not isinstance(box, dict) or key not in box]
+            missing = [key for key in keys if not isinstance(box, dict) or key not in box]
             if missing:
-                raise TracksError(f"{path}:{line}: sample {token!r}, box {k}: missing {', '.join(missing)}")
-            if box["tracking_name"] not in CLASSES:
+                raise error(f"{where}: sample {token!r}, box {k}: missing {', '.join(missing)}")
+            if box[f"{kind}_name"] not in CLASSES:
                 continue
             try:
                 x, y, z = (float(v) for v in box["translation"])
                 width, length, height = (float(v) for v in box["size"])
                 w, qx, qy, qz = (float(v) for v in box["rotation"])
                 vx, vy = (float(v) for v in box["velocity"])
-                score = float(box["tracking_score"])
-            except (TypeError, ValueError) as error:
-                raise TracksError(f"{path}:{line}: sample {token!r}, box {k}: {error} (translation 3, size 3, "
-                                  "rotation 4, velocity 2 numbers, tracking_score a number)") from None
+                score = float(box[f"{kind}_score"])
+            except (TypeError, ValueError) as problem:
+                raise error(f"{where}: sample {token!r}, box {k}: {problem} (translation 3, size 3, "
+                            f"rotation 4, velocity 2 numbers, {kind}_score a number)") from None
             yaw = float(np.arctan2(2.0 * (w * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz)))
-            boxes.append((tokens[token], str(box["tracking_id"]), box["tracking_name"], score,
+            boxes.append((tokens[token], str(box.get("tracking_id", "")), box[f"{kind}_name"], score,
                           x, y, z, length, width, height, yaw, vx, vy))
+    return boxes, frames
+
+
+def read_nuscenes(path: Path, *, tokens: dict[str, int], scenes: np.ndarray | None = None) -> dict[str, pa.Table]:
+    """The 3D tracks table of the results JSON at ``path``; ``tokens``: the dataset's sample token → frame;
+    ``scenes``: ``(F,)`` scene index of every frame, or ``None`` for one scene."""
+    boxes, _ = read_results(path, tokens=tokens)
     if scenes is not None:
         keys = [(int(scenes[b[0]]), b[1]) for b in boxes]
         number = {key: k for k, key in enumerate(sorted(set(keys)))}

@@ -21,7 +21,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
 def _cmd_fit(args: argparse.Namespace) -> int:
     from .fit import fit_to_toml
 
-    print(fit_to_toml(args.detections, args.truth, args.out))
+    print(fit_to_toml(args.detections, args.truth, args.out, args.cameras))
     return 0
 
 
@@ -37,6 +37,10 @@ def add_detector_command(commands) -> None:
     fit.add_argument("--detections", type=Path, required=True,
                      help="a simrig dataset folder, or a nuScenes detection-results JSON")
     fit.add_argument("--truth", type=Path, default=None,
-                     help="ground truth: nuScenes-style boxes JSON (not needed for a simrig dataset)")
+                     help="ground truth of a detection-results JSON: the nuScenes tables folder (or the data "
+                          "root above it) or a simrig dataset (leave out for a simrig dataset's own detections)")
+    fit.add_argument("--cameras", type=int, default=None, metavar="N",
+                     help="cameras of the rig the fitted model runs on: a JSON's clutter per sample is divided "
+                          "by N (default 6, nuScenes)")
     fit.add_argument("--out", type=Path, required=True, help="the TOML file to write")
     fit.set_defaults(run=_cmd_fit)

@@ -2,8 +2,9 @@
 
 The input is a simrig dataset (its ``sensor_truth`` says which detection came from which actor; only
 what a real log also has is used: boxes, scores, which object a detection is, whether it was in view,
-occluded, truncated or far — never the sampled causes ``burst``, ``ghost`` or ``duplicate``). Estimators,
-each named in the written TOML:
+occluded, truncated or far — never the sampled causes ``burst``, ``ghost`` or ``duplicate``), or a nuScenes
+detection-results JSON with nuScenes ground truth (:mod:`.fit_nuscenes`, which :func:`fit_to_toml` hands it
+to). The estimators (:mod:`.estimators`, shared by both), each named in the written TOML:
 
 * σ of depth, lateral, size, yaw and velocity errors: the standard deviation per 10 m band of the true
   range from the camera, fitted by weighted least squares with σ(d) = a + b·d. Depth keeps (a, b); the
@@ -29,7 +30,6 @@ noise, embeddings, ghosts, duplicates and class confusion.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -37,49 +37,8 @@ import numpy as np
 from ..causes import Cause, cause_masks
 from ..dataset import Dataset
 from ..errors import SimrigError
-from .measure import _STRUCTURAL, consecutive_pairs, depth_errors, lag1, linked_errors
-
-BAND_M = 10.0
-_LAGS = 4
-
-
-@dataclass
-class Fit:
-    """Fitted ``[sensor]`` tables and one note per parameter (how, or why not)."""
-
-    sensor: dict
-    notes: list[str]
-
-
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    return (angle + np.pi) % (2 * np.pi) - np.pi
-
-
-def sigma_vs_range(errors: np.ndarray, distance: np.ndarray, columns: int = 1) -> tuple[float, float]:
-    """(a, b) of σ(d) = a + b·d from per-band standard deviations of ``errors`` (``(R,)`` or ``(R, k)``
-    pooled), weighted by the band's count."""
-    errors = errors.reshape(len(errors), -1)
-    band = np.floor(distance / BAND_M).astype(int)
-    centres, sigmas, weights = [], [], []
-    for b in np.unique(band):
-        rows = band == b
-        values = errors[rows].ravel()
-        values = values[np.isfinite(values)]
-        if len(values) < 30:
-            continue
-        centres.append(distance[rows].mean())
-        sigmas.append(np.sqrt(np.mean(values**2)))
-        weights.append(len(values))
-    if len(centres) < 2:
-        values = errors[np.isfinite(errors)]
-        return (float(np.sqrt(np.mean(values**2))) if len(values) else 0.0), 0.0
-    design = np.column_stack([np.ones(len(centres)), centres]) * np.sqrt(weights)[:, None]
-    a, b = np.linalg.lstsq(design, np.array(sigmas) * np.sqrt(weights), rcond=None)[0]
-    return float(a), float(b)
-
-
-def _tau(rho: float, period: float) -> float:
-    return float(-period / np.log(rho)) if 0.0 < rho < 1.0 else 0.0
+from .estimators import Fit, box_errors, fit_box3d, fit_scores, gilbert_elliott, sigma_vs_range
+from .measure import _STRUCTURAL, consecutive_pairs, lag1, linked_errors
 
 
 def fit_dataset(path: Path | str) -> Fit:
@@ -89,48 +48,17 @@ def fit_dataset(path: Path | str) -> Fit:
     links = linked_errors(dataset)
     if len(links["frame"]) < 100:
         raise SimrigError(f"{path}: only {len(links['frame'])} detections of actors; too few to fit a detector")
-    truth, estimate, centre = links["truth"], links["estimate"], links["centre"]
-    ray = truth[:, :3] - centre
-    distance = np.linalg.norm(ray, axis=1)
-    unit = ray / distance[:, None]
-    across = np.cross(np.array([0.0, 0.0, 1.0]), unit)
-    across /= np.linalg.norm(across, axis=1, keepdims=True)
-    depth = depth_errors(links)
-    lateral = np.einsum("ij,ij->i", estimate[:, :3] - truth[:, :3], across)
-    size = estimate[:, 3:6] / truth[:, 3:6] - 1.0
-    yaw = _wrap(estimate[:, 6] - truth[:, 6])
-    flipped = np.abs(yaw) > np.pi / 2
-    yaw_gauss = np.where(flipped, np.nan, yaw)
-    velocity = estimate[:, 7:9] - truth[:, 7:9]
+    errors = box_errors(links["truth"], links["estimate"], links["centre"])
+    distance = errors["distance"]
     notes = []
-
-    depth_a, depth_b = sigma_vs_range(depth, distance)
-    fitted, scales = {}, []
-    for name, values in (("lateral_sigma_m", lateral), ("size_sigma", size), ("yaw_sigma_deg", np.degrees(yaw_gauss)),
-                         ("velocity_sigma_mps", velocity)):
-        a, b = sigma_vs_range(values, distance)
-        fitted[name] = max(a, 0.0)
-        if b > 0 and a > 0:
-            scales.append(a / b)
-    distance_scale = float(np.median(scales)) if scales else None
-    notes.append("box3d σ: RMS per 10 m range band, weighted least squares σ(d) = a + b·d; distance_scale_m = "
-                 f"median a/b over lateral, size, yaw, velocity ({', '.join(f'{s:.1f}' for s in scales)} m)")
-
-    a, b = consecutive_pairs(links["frame"], links["camera"], links["actor"])
-    depth_normal = depth / (depth_a + depth_b * distance)
-    size_sigma = fitted["size_sigma"] * (1.0 + distance / distance_scale if distance_scale else 1.0)
-    size_normal = size[:, 0] / size_sigma
-    tau = _tau(lag1(depth_normal, a, b), period)
-    size_tau = _tau(lag1(size_normal, a, b), period)
-    notes.append(f"correlation times: τ = −Δt/ln ρ from {len(a)} consecutive-frame pairs")
-    flip_p = float(flipped.mean())
-    rho_flip = lag1(flipped.astype(float), a, b)
-    flip_duration = period / ((1.0 - rho_flip) * (1.0 - flip_p)) if rho_flip > 0.05 and flip_p > 0 else 0.0
+    pairs = consecutive_pairs(links["frame"], links["camera"], links["actor"])
+    box3d, depth_normal = fit_box3d(errors, pairs, period, notes)
     same = _same_time_pairs(links)
     shared = lag1(depth_normal, *same) if len(same[0]) >= 30 else float("nan")
     if not np.isfinite(shared):
         notes.append("shared_fraction: not identifiable (fewer than 30 actor sightings by two cameras at once)")
     notes.append(f"shared_fraction: correlation of normalised depth errors over {len(same[0])} two-camera sightings")
+    box3d["shared_fraction"] = float(np.clip(shared, 0.0, 1.0)) if np.isfinite(shared) else 0.0
 
     detection, burst_note = _fit_misses(dataset, period)
     notes.append(burst_note)
@@ -140,12 +68,6 @@ def fit_dataset(path: Path | str) -> Fit:
     notes.append("clutter.rate_per_frame: all unmatched detections (clutter, ghosts and duplicates are not "
                  "separable from detections and truth alone)")
     notes.append("not fitted: detection ramps, box2d, embedding, ghosts, duplicates, confusion (defaults)")
-    box3d = {"depth_sigma_m": max(depth_a, 0.0), "depth_sigma_per_m": max(depth_b, 0.0), **fitted,
-             "yaw_flip_probability": flip_p, "correlation_time_s": tau, "size_correlation_time_s": size_tau,
-             "shared_fraction": float(np.clip(shared, 0.0, 1.0)) if np.isfinite(shared) else 0.0,
-             "yaw_flip_duration_s": flip_duration}
-    if distance_scale:
-        box3d["distance_scale_m"] = distance_scale
     sensor = {"detection": detection, "box3d": {k: round(float(v), 6) for k, v in box3d.items()},
               "score": score, "clutter": {"rate_per_frame": round(clutter_rate, 6)}}
     return Fit(sensor, notes)
@@ -169,32 +91,8 @@ def _fit_misses(dataset: Dataset, period: float) -> tuple[dict, str]:
     camera = np.array([cameras[n] for n in np.asarray(sensor.column("camera").to_pylist())[real]])
     frame = sensor.column("frame").to_numpy()[real][eligible]
     key = (actor[real] * 64 + camera)[eligible]
-    miss = (sensor.column("detection").to_numpy()[real] < 0)[eligible].astype(float)
-    m = float(miss.mean())
-    lookup = {(int(k), int(f)): i for i, (k, f) in enumerate(zip(key, frame, strict=True))}
-    covariance, counts = [], []
-    for lag in range(1, _LAGS + 1):
-        pairs = [(i, lookup.get((int(key[i]), int(frame[i]) + lag))) for i in range(len(frame))]
-        a = np.array([i for i, j in pairs if j is not None], dtype=np.int64)
-        b = np.array([j for _, j in pairs if j is not None], dtype=np.int64)
-        covariance.append(float(np.mean((miss[a] - m) * (miss[b] - m))) if len(a) else 0.0)
-        counts.append(len(a))
-    c = np.array(covariance)
-    if c[0] <= 1e-4 or np.any(c <= 0):
-        return ({"probability": round(1.0 - m, 6), "burst_fraction": 0.0},
-                f"detection: p = 1 − miss rate {m:.3f}; no miss bursts found (lag-1 covariance {c[0]:.2g})")
-    lags = np.arange(1, _LAGS + 1)
-    slope, intercept = np.polyfit(lags, np.log(c), 1, w=np.sqrt(counts))
-    lam, amplitude = float(np.exp(slope)), float(np.exp(intercept))
-    if not 0.0 < lam < 1.0:
-        return ({"probability": round(1.0 - m, 6), "burst_fraction": 0.0},
-                f"detection: miss autocovariance does not decay (λ = {lam:.3f}); bursts not identifiable")
-    g = min(1.0, amplitude / (1.0 - m) + (1.0 - m))
-    pi = max(0.0, 1.0 - (1.0 - m) / g)
-    burst = period / ((1.0 - pi) * (1.0 - lam))
-    return ({"probability": round(g, 6), "burst_fraction": round(pi, 6), "burst_mean_s": round(burst, 6)},
-            f"detection: Gilbert–Elliott moments on {len(miss)} eligible (actor, camera) frames: miss rate "
-            f"{m:.3f}, autocovariance at lags 1–{_LAGS} {', '.join(f'{v:.4f}' for v in c)} (λ = {lam:.3f})")
+    miss = (sensor.column("detection").to_numpy()[real] < 0)[eligible]
+    return gilbert_elliott(key, frame, miss, period, "eligible (actor, camera) frames")
 
 
 def _fit_scores(dataset: Dataset, links: dict, distance: np.ndarray) -> dict:
@@ -210,15 +108,7 @@ def _fit_scores(dataset: Dataset, links: dict, distance: np.ndarray) -> dict:
     truncation = projections.column("truncation").to_numpy().reshape(-1, c)[row, links["camera"]]
     quality = np.nan_to_num(1.0 - occlusion, nan=1.0) * (1.0 - np.nan_to_num(truncation, nan=1.0))
     error = np.hypot(*(links["estimate"][:, :2] - links["truth"][:, :2]).T)
-    design = np.column_stack([np.ones(len(error)), quality, 1.0 - np.exp(-error), np.minimum(1.0, distance / 60.0)])
-    score = links["score"]
-    inside = (score > 0.02) & (score < 0.999)  # clipped scores would bias the fit
-    coef = np.linalg.lstsq(design[inside], score[inside], rcond=None)[0]
-    residual = score[inside] - design[inside] @ coef
-    return {"base": round(float(np.clip(coef[0], 0, 1)), 6), "gain": round(float(np.clip(coef[1], 0, 1)), 6),
-            "error_gain": round(float(np.clip(-coef[2], 0, 1)), 6), "error_scale_m": 1.0,
-            "distance_gain": round(float(np.clip(-coef[3], 0, 1)), 6), "distance_scale_m": 60.0,
-            "sigma": round(float(residual.std()), 6)}
+    return fit_scores(links["score"], error, distance, quality)
 
 
 def _clutter_rate(dataset: Dataset) -> float:
@@ -227,17 +117,32 @@ def _clutter_rate(dataset: Dataset) -> float:
     return false / (dataset.frame_count * len(dataset.rig.camera_names))
 
 
-def fit_to_toml(detections: Path, truth: Path | None, out: Path) -> str:
-    """Fit and write ``out`` (a TOML file with a ``[sensor]`` table a scenario can copy); returns a summary."""
+def fit_to_toml(detections: Path, truth: Path | None, out: Path, cameras: int | None = None) -> str:
+    """Fit and write ``out`` (a TOML file with a ``[sensor]`` table a scenario can copy); returns a summary.
+    ``detections``: a simrig dataset folder (its own ground truth; no ``truth``), or a nuScenes detection-results
+    JSON with ``truth`` the nuScenes tables or a simrig dataset (:mod:`.fit_nuscenes`; ``cameras`` divides its
+    per-sample clutter rate, 6 when ``None``)."""
     import tomli_w
 
-    if not Path(detections).is_dir():
-        raise SimrigError(f"--detections {str(detections)!r}: expected a simrig dataset folder; nuScenes "
-                          "detection-results JSON input is not supported yet")
-    if truth is not None:
-        raise SimrigError("--truth: a simrig dataset carries its own ground truth; leave --truth out")
-    fit = fit_dataset(detections)
-    header = "".join(f"# {note}\n" for note in [f"fitted by simrig detector fit from {detections}", *fit.notes])
+    detections = Path(detections)
+    if detections.is_dir():
+        if truth is not None:
+            raise SimrigError("--truth: a simrig dataset carries its own ground truth; leave --truth out")
+        if cameras is not None:
+            raise SimrigError("--cameras: only for a nuScenes detection-results JSON (a simrig dataset has its rig)")
+        fit = fit_dataset(detections)
+    elif detections.is_file():
+        from .fit_nuscenes import NUSCENES_CAMERAS, fit_nuscenes
+
+        if truth is None:
+            raise SimrigError(f"--truth: {str(detections)!r} is a detection-results JSON; give its ground truth (the "
+                              "nuScenes tables folder or a simrig dataset)")
+        fit = fit_nuscenes(detections, Path(truth), NUSCENES_CAMERAS if cameras is None else cameras)
+    else:
+        raise SimrigError(f"--detections {str(detections)!r}: no such file or folder (a simrig dataset folder or a "
+                          "nuScenes detection-results JSON)")
+    source = f"{detections}" + (f" against {truth}" if truth is not None else "")
+    header = "".join(f"# {note}\n" for note in [f"fitted by simrig detector fit from {source}", *fit.notes])
     text = header + tomli_w.dumps({"sensor": fit.sensor})
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text, encoding="utf-8")
