@@ -111,6 +111,8 @@ def test_fit_refuses_what_it_cannot_read_in_one_line(tmp_path, capsys):
 
 
 KNOWN = """extends = "highway_surround6"
+[sensor]
+preset = "ideal_noise"   # the model's own defaults under the keys below: no ghosts, duplicates or confusion
 [render]
 visibility = false
 [traffic]
