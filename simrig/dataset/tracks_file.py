@@ -31,6 +31,8 @@ import pyarrow.parquet as pq
 from simrig.errors import TracksError
 from simrig.types import BOX2D_FIELDS, BOX3D_FIELDS, ActorClass, Track
 
+from .arrow_columns import shared_strings
+
 TRACKS3D_FILE = "tracks3d.parquet"
 TRACKS2D_FILE = "tracks2d.parquet"
 _KEYS3D = ("frame", "track_id", "class", "score")
@@ -77,24 +79,59 @@ class TrackSet:
     tracks2d: TrackRows | None
 
 
-def track_tables(frames: Iterable[tuple[int, Iterable[Track]]]) -> dict[str, pa.Table]:
-    """The tables of ``(frame, tracks)`` pairs (as returned by a tracker, frame by frame), by file name:
-    ``tracks3d.parquet`` from the tracks' 3D boxes and ``tracks2d.parquet`` from their per-camera boxes (each
-    present only when some track has such boxes; both, empty, when none has)."""
-    rows3d, rows2d = [], []
-    for frame, tracks in frames:
+class TrackTables:
+    """The tables of a tracker's output, built frame by frame: :meth:`add` turns one frame's tracks into column
+    arrays at once (a few numbers per track, so a long run does not hold its :class:`~simrig.types.Track`
+    objects); :meth:`tables` joins them."""
+
+    def __init__(self) -> None:
+        self._parts3d: list[tuple[np.ndarray, ...]] = []
+        self._parts2d: list[tuple[np.ndarray, ...]] = []
+
+    def add(self, frame: int, tracks: Iterable[Track]) -> None:
+        """One frame's tracks (as a tracker returned them)."""
+        ids3d, labels3d, scores3d, boxes3d = [], [], [], []
+        cameras, ids2d, labels2d, scores2d, boxes2d = [], [], [], [], []
         for track in tracks:
             label = ActorClass(track.label).value
             if track.box3d is not None:
-                rows3d.append((frame, track.track_id, label, track.score, *track.box3d.as_array().tolist()))
+                ids3d.append(track.track_id)
+                labels3d.append(label)
+                scores3d.append(track.score)
+                boxes3d.append(track.box3d.as_array())
             for camera, box in track.boxes2d.items():
-                rows2d.append((frame, camera, track.track_id, label, track.score, *box.as_array().tolist()))
-    tables = {}
-    if rows3d or not rows2d:
-        tables[TRACKS3D_FILE] = _table(rows3d, TRACKS3D_SCHEMA)
-    if rows2d or not rows3d:
-        tables[TRACKS2D_FILE] = _table(rows2d, TRACKS2D_SCHEMA)
-    return tables
+                cameras.append(camera)
+                ids2d.append(track.track_id)
+                labels2d.append(label)
+                scores2d.append(track.score)
+                boxes2d.append(box.as_array())
+        if ids3d:
+            self._parts3d.append((np.full(len(ids3d), frame, dtype=np.int64), np.array(ids3d, dtype=np.int64),
+                                  np.array(labels3d, dtype=object), np.array(scores3d, dtype=float),
+                                  np.stack(boxes3d)))
+        if ids2d:
+            self._parts2d.append((np.full(len(ids2d), frame, dtype=np.int64), np.array(cameras, dtype=object),
+                                  np.array(ids2d, dtype=np.int64), np.array(labels2d, dtype=object),
+                                  np.array(scores2d, dtype=float), np.stack(boxes2d)))
+
+    def tables(self) -> dict[str, pa.Table]:
+        """The tables by file name: ``tracks3d.parquet`` from the tracks' 3D boxes and ``tracks2d.parquet`` from
+        their per-camera boxes (each present only when some track has such boxes; both, empty, when none has)."""
+        tables = {}
+        if self._parts3d or not self._parts2d:
+            tables[TRACKS3D_FILE] = _parts_table(self._parts3d, TRACKS3D_SCHEMA, 9)
+        if self._parts2d or not self._parts3d:
+            tables[TRACKS2D_FILE] = _parts_table(self._parts2d, TRACKS2D_SCHEMA, 4)
+        return tables
+
+
+def track_tables(frames: Iterable[tuple[int, Iterable[Track]]]) -> dict[str, pa.Table]:
+    """The tables of ``(frame, tracks)`` pairs (as returned by a tracker, frame by frame), by file name
+    (:meth:`TrackTables.tables`)."""
+    builder = TrackTables()
+    for frame, tracks in frames:
+        builder.add(frame, tracks)
+    return builder.tables()
 
 
 def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]] | dict[str, pa.Table]) -> Path:
@@ -121,7 +158,22 @@ def tracks_in_memory(tables: dict[str, pa.Table], *, frame_count: int, cameras: 
     return TrackSet(source=source, tracks3d=rows.get(TRACKS3D_FILE), tracks2d=rows.get(TRACKS2D_FILE))
 
 
+def _parts_table(parts: list[tuple[np.ndarray, ...]], schema: pa.Schema, box_size: int) -> pa.Table:
+    """One table of per-frame column arrays (the schema's columns before the box, then the ``(k, box_size)``
+    box)."""
+    keys = len(schema) - box_size
+    if parts:
+        columns = [np.concatenate([part[i] for part in parts]) for i in range(keys)]
+        boxes = np.concatenate([part[keys] for part in parts])
+    else:
+        columns, boxes = [np.zeros(0, dtype=object) for _ in range(keys)], np.zeros((0, box_size))
+    columns += [boxes[:, i] for i in range(box_size)]
+    return pa.table([pa.array(column.tolist() if column.dtype == object else column, type=field.type)
+                     for column, field in zip(columns, schema, strict=True)], schema=schema)
+
+
 def _table(rows: list[tuple], schema: pa.Schema) -> pa.Table:
+    """One table of row tuples in the schema's column order (the outside formats' readers)."""
     columns = list(zip(*rows, strict=True)) if rows else [[] for _ in schema.names]
     return pa.table([pa.array(list(column), type=field.type) for column, field in zip(columns, schema, strict=True)],
                     schema=schema)
@@ -236,7 +288,7 @@ def _column(file: Path | str, table: pa.Table, field: pa.Field) -> np.ndarray:
     if pa.types.is_string(field.type) or pa.types.is_large_string(field.type):
         if not (pa.types.is_string(kind) or pa.types.is_large_string(kind)):
             raise TracksError(f"{file}: column {field.name!r} must hold strings, found {kind}")
-        return np.asarray(column.to_pylist(), dtype=object)
+        return shared_strings(column)
     if pa.types.is_integer(field.type):
         if not pa.types.is_integer(kind):
             raise TracksError(f"{file}: column {field.name!r} must hold integers, found {kind}")

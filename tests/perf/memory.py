@@ -1,0 +1,137 @@
+"""Memory check (issue 23, check 8): peak RSS of ``generate``, ``track`` and ``score`` at 5,000 frames of
+``highway_surround6`` (rendering off) against 500 frames; the target is at most 1.5×.
+
+Run explicitly (not part of the test suite)::
+
+    python tests/perf/memory.py [--frames 500 5000] [--trackers saga global_hungarian] [--scratch /tmp/simrig-memory]
+                                [--steps generate track score]
+
+Each command runs as the CLI a user types (``simrig generate|track|score``), in its own child process, one at a
+time; its peak resident set size is the ``ru_maxrss`` that ``os.wait4`` returns for exactly that child (the
+kernel's high-water mark of its RSS, not a sampled value). The scenario is ``highway_surround6`` extended with
+``[render] visibility = false`` (traffic, projection and the sensor model; no pyrender), seed 0.
+
+Datasets and tracks are kept under ``--scratch`` (``ds{N}``, ``tracks{N}_{tracker}``) and reused by later runs;
+``--steps`` chooses what is measured this time (e.g. ``--steps track score`` reuses the datasets, since a
+5,000-frame generation takes minutes). Measurements are merged into ``--scratch/measurements.json`` with the
+commit they were made at, and the table of every (command, frames) measured so far is printed and written to
+``reports/perf/memory.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import tomli_w
+from published import command_line, machine, publish  # tests/perf helpers
+
+REPORT = Path(__file__).resolve().parents[2] / "reports" / "perf" / "memory.md"
+SCENARIO = "highway_surround6"
+TARGET = 1.5
+"""[-] peak RSS at the longest run may be at most this multiple of the shortest run's."""
+SIMRIG = [str(Path(sys.executable).with_name("simrig"))]
+"""The CLI of the environment this script runs in."""
+
+
+def peak_rss_mb(command: list[str]) -> tuple[float, float]:
+    """Run ``command`` as a child process; its peak RSS [MiB] (``ru_maxrss`` from ``os.wait4``) and wall time
+    [s]. A failing command stops the benchmark with its exit status."""
+    started = time.perf_counter()
+    child = subprocess.Popen(command, stdout=subprocess.DEVNULL)
+    _, status, usage = os.wait4(child.pid, 0)
+    child.returncode = os.waitstatus_to_exitcode(status)
+    if child.returncode:
+        raise SystemExit(f"{' '.join(command)}: exit status {child.returncode}")
+    return usage.ru_maxrss / 1024, time.perf_counter() - started  # ru_maxrss is in KiB on Linux
+
+
+def commit() -> str:
+    """The short commit of the working tree (with ``+`` when it has uncommitted changes)."""
+    root = Path(__file__).resolve().parents[2]
+    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root, capture_output=True,
+                           text=True).stdout
+    return head.strip() + ("+" if dirty.strip() else "")
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, nargs="+", default=[500, 5000])
+    parser.add_argument("--trackers", nargs="+", default=["saga", "global_hungarian"])
+    parser.add_argument("--scratch", type=Path, default=Path("/tmp/simrig-memory"))
+    parser.add_argument("--steps", nargs="+", choices=("generate", "track", "score"),
+                        default=["generate", "track", "score"])
+    parser.add_argument("--report", type=Path, default=REPORT)
+    args = parser.parse_args()
+    scratch = args.scratch.resolve()
+    scratch.mkdir(parents=True, exist_ok=True)
+    scenario = scratch / f"{SCENARIO}-no-rendering.toml"
+    scenario.write_text(tomli_w.dumps({"extends": SCENARIO, "render": {"visibility": False}}))
+    store = scratch / "measurements.json"
+    measured = json.loads(store.read_text()) if store.exists() else {}
+    at = commit()
+
+    def measure(key: str, command: list[str]) -> None:
+        rss, wall = peak_rss_mb(command)
+        measured[key] = {"rss_mb": rss, "wall_s": wall, "commit": at}
+        store.write_text(json.dumps(measured, indent=1, sort_keys=True))
+        print(f"{key}: peak RSS {rss:.0f} MiB, {wall:.0f} s", flush=True)
+
+    for frames in sorted(args.frames):
+        dataset = scratch / f"ds{frames}"
+        if "generate" in args.steps:
+            shutil.rmtree(dataset, ignore_errors=True)
+            measure(f"generate|{frames}", [*SIMRIG, "generate", str(scenario), "--seed", "0", "--frames",
+                                           str(frames), "--out", str(dataset), "--quiet"])
+        for name in args.trackers:
+            tracks = scratch / f"tracks{frames}_{name}"
+            if "track" in args.steps:
+                shutil.rmtree(tracks, ignore_errors=True)
+                measure(f"track {name}|{frames}", [*SIMRIG, "track", str(dataset), "--tracker", name,
+                                                   "--out", str(tracks)])
+            if "score" in args.steps:
+                measure(f"score {name}|{frames}", [*SIMRIG, "score", str(dataset), str(tracks),
+                                                   "--json", str(scratch / f"score{frames}_{name}.json")])
+
+    commands = ["generate", *(f"track {name}" for name in args.trackers), *(f"score {name}" for name in args.trackers)]
+    lengths = sorted({int(key.split("|")[1]) for key in measured})
+    short, long = lengths[0], lengths[-1]
+    rows, all_ok = [], True
+    for name in commands:
+        cells = [measured.get(f"{name}|{frames}") for frames in lengths]
+        if cells[0] is None or cells[-1] is None:
+            continue
+        ratio = cells[-1]["rss_mb"] / cells[0]["rss_mb"]
+        ok = ratio <= TARGET
+        all_ok &= ok
+        rows.append(f"| `simrig {name}` | " + " | ".join(
+            "–" if cell is None else f"{cell['rss_mb']:.0f} ({cell['wall_s']:.0f} s, {cell['commit']})"
+            for cell in cells) + f" | {ratio:.2f} ({'ok' if ok else 'FAILS'}) |")
+    lines = [
+        f"# Peak memory of long runs — {SCENARIO}, rendering off, seed 0",
+        "",
+        f"Command: `{command_line()}`  ",
+        f"Machine: {machine()}. Peak RSS [MiB] of each CLI command run alone in its own child process "
+        "(`ru_maxrss` of that child from `os.wait4`), with its wall time and the commit it was measured at "
+        f"(`+`: with uncommitted changes). Target (issue 23, check 8): {long} frames within {TARGET}× of {short}.",
+        "",
+        "| command | " + " | ".join(f"{frames} frames" for frames in lengths) + f" | {long}/{short} |",
+        "|---|" + "---:|" * (len(lengths) + 1),
+        *rows,
+        "",
+        f"Check 8 (memory) of issue 23: {'PASSES' if all_ok else 'FAILS'}.",
+        "",
+    ]
+    publish(lines, args.report)
+    return 0 if all_ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
