@@ -224,6 +224,7 @@ def _rows(file: Path | str, table: pa.Table, layout: str, frame_count: int, came
         raise TracksError(f"{file}: unknown column(s) {', '.join(unknown)} (a {layout} file has: "
                           f"{', '.join(schema.names)})")
     columns = {field.name: _column(file, table, field) for field in schema}
+    del table  # only the numpy columns from here on
     frame, track_id = columns["frame"], columns["track_id"]
 
     def fail(row: int, what: str) -> None:
@@ -232,11 +233,11 @@ def _rows(file: Path | str, table: pa.Table, layout: str, frame_count: int, came
         raise TracksError(f"{file}: {where}: {what}")
 
     numeric = [name for name in schema.names if name not in ("frame", "track_id", "class", "camera")]
-    values = np.column_stack([columns[name] for name in numeric]) if len(frame) else np.zeros((0, len(numeric)))
-    bad = ~np.isfinite(values)
-    if bad.any():
-        row, col = np.argwhere(bad)[0]
-        fail(int(row), f"column {numeric[col]!r} is {values[row, col]} (must be a finite number)")
+    first_bad = [(int(np.argmin(finite)), col) for col, name in enumerate(numeric)
+                 if not (finite := np.isfinite(columns[name])).all()]
+    if first_bad:  # the first in row order, then column order
+        row, col = min(first_bad)
+        fail(row, f"column {numeric[col]!r} is {columns[numeric[col]][row]} (must be a finite number)")
     outside = np.nonzero((frame < 0) | (frame >= frame_count))[0]
     if len(outside):
         fail(int(outside[0]), f"frame {frame[outside[0]]} is not in the dataset (frames 0…{frame_count - 1})")

@@ -79,7 +79,7 @@ class Attributor:
             "dimension": [dimension] * n, "kind": kinds, "frame": frames.astype(np.int32),
             "camera": [camera] * n, "class": [label] * n, "actor_id": actors.astype(np.int64),
             "track_id": tracks.astype(np.int64), "previous_track_id": previous.astype(np.int64),
-            "causes": [cause_names(int(mask)) for mask in masks],
+            "causes": cause_name_lists(masks),
         }, schema=ERRORS_SCHEMA)
 
     def tag_ignored(self, label: str, camera: str, misses: np.ndarray, rules: np.ndarray) -> pa.Table:
@@ -115,6 +115,17 @@ class Attributor:
 
     def _actor_rows(self, actor: int) -> np.ndarray:
         return np.nonzero(self.truth.actor_id == actor)[0]
+
+
+def cause_name_lists(masks: np.ndarray) -> pa.ListArray:
+    """The list<string> column of :func:`cause_names` of each of ``(n,)`` masks, built once per distinct mask.
+
+    >>> cause_name_lists(np.array([0, int(Cause.FAR), 0])).to_pylist()
+    [['none'], ['far'], ['none']]
+    """
+    distinct, inverse = np.unique(np.asarray(masks, dtype=np.int64), return_inverse=True)
+    names = pa.array([cause_names(int(mask)) for mask in distinct], type=pa.list_(pa.string()))
+    return names.take(pa.array(inverse.reshape(-1)))
 
 
 def cause_names(mask: int) -> list[str]:
