@@ -78,15 +78,17 @@ def ignore_rules(truth: GroundTruth, config: EvaluationConfig) -> np.ndarray:
     rules = np.zeros(truth.in_view.shape, dtype=np.int64)
     if not config.ignore or rules.size == 0:
         return rules
-    labels, inverse = np.unique(truth.label.astype(str), return_inverse=True)
-    limit = np.array([config.class_range_m(label) for label in labels])[inverse.reshape(-1)]
-    rules |= np.where(truth.ego_distance >= limit, int(IgnoreRule.RANGE), 0)[:, None]
-    height = truth.boxes2d[..., 3] - truth.boxes2d[..., 1]
-    rules |= np.where(height < config.min_height_px, int(IgnoreRule.HEIGHT), 0)
+    labels, inverse = np.unique(truth.label, return_inverse=True)
+    limit = np.array([config.class_range_m(str(label)) for label in labels])[inverse.reshape(-1)]
+    rules[truth.ego_distance >= limit] |= int(IgnoreRule.RANGE)
+    # One (R, C) temporary at a time: a long run's per-camera arrays are large.
+    rules[truth.boxes2d[..., 3] - truth.boxes2d[..., 1] < config.min_height_px] |= int(IgnoreRule.HEIGHT)
     visible = 1.0 - truth.occlusion
-    rules |= np.where(np.isfinite(visible) & (visible <= config.min_visible_fraction), int(IgnoreRule.VISIBILITY), 0)
-    rules |= np.where(truth.truncation > config.max_truncation, int(IgnoreRule.TRUNCATION), 0)
-    return np.where(truth.in_view, rules, 0)
+    rules[np.isfinite(visible) & (visible <= config.min_visible_fraction)] |= int(IgnoreRule.VISIBILITY)
+    del visible
+    rules[truth.truncation > config.max_truncation] |= int(IgnoreRule.TRUNCATION)
+    rules[~truth.in_view] = 0
+    return rules
 
 
 def rule_names(mask: int) -> list[str]:

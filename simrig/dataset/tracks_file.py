@@ -293,7 +293,7 @@ def _column(file: Path | str, table: pa.Table, field: pa.Field) -> np.ndarray:
     if pa.types.is_integer(field.type):
         if not pa.types.is_integer(kind):
             raise TracksError(f"{file}: column {field.name!r} must hold integers, found {kind}")
-        return column.to_numpy().astype(np.int64)
+        return column.to_numpy().astype(np.int64, copy=False)
     if not (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
         raise TracksError(f"{file}: column {field.name!r} must hold numbers, found {kind}")
-    return column.to_numpy().astype(float)
+    return column.to_numpy().astype(float, copy=False)  # a view on the table where it already is
