@@ -86,19 +86,20 @@ def ignore_rules(truth: GroundTruth, config: EvaluationConfig) -> np.ndarray:
     rules = np.zeros(truth.in_view.shape, dtype=np.int64)
     if not config.ignore or rules.size == 0:
         return rules
-    labels, inverse = np.unique(truth.label.astype(str), return_inverse=True)
-    limit = np.array([config.class_range_m(label) for label in labels])[inverse.reshape(-1)]
-    rules |= np.where(truth.ego_distance >= limit, int(IgnoreRule.RANGE), 0)[:, None]
-    height = truth.boxes2d[..., 3] - truth.boxes2d[..., 1]
-    rules |= np.where(height < config.min_height_px, int(IgnoreRule.HEIGHT), 0)
+    labels, inverse = np.unique(truth.label, return_inverse=True)
+    limit = np.array([config.class_range_m(str(label)) for label in labels])[inverse.reshape(-1)]
+    rules[truth.ego_distance >= limit] |= int(IgnoreRule.RANGE)
+    # One (R, C) temporary at a time: a long run's per-camera arrays are large.
+    rules[truth.boxes2d[..., 3] - truth.boxes2d[..., 1] < config.min_height_px] |= int(IgnoreRule.HEIGHT)
     visible = 1.0 - truth.occlusion
-    rules |= np.where(np.isfinite(visible) & (visible <= config.min_visible_fraction), int(IgnoreRule.VISIBILITY), 0)
-    rules |= np.where(truth.truncation > config.max_truncation, int(IgnoreRule.TRUNCATION), 0)
+    rules[np.isfinite(visible) & (visible <= config.min_visible_fraction)] |= int(IgnoreRule.VISIBILITY)
+    del visible
+    rules[truth.truncation > config.max_truncation] |= int(IgnoreRule.TRUNCATION)
     if truth.source_ignored is not None:
-        rules |= np.where(truth.source_ignored == 1 + SOURCE_KINDS.index("distractor"), int(IgnoreRule.SOURCE), 0)
-        rules |= np.where(truth.source_ignored == 1 + SOURCE_KINDS.index("unevaluated"),
-                          int(IgnoreRule.UNEVALUATED), 0)
-    return np.where(truth.in_view, rules, 0)
+        rules[truth.source_ignored == 1 + SOURCE_KINDS.index("distractor")] |= int(IgnoreRule.SOURCE)
+        rules[truth.source_ignored == 1 + SOURCE_KINDS.index("unevaluated")] |= int(IgnoreRule.UNEVALUATED)
+    rules[~truth.in_view] = 0
+    return rules
 
 
 KEEPS_MATCHES = int(IgnoreRule.UNEVALUATED)

@@ -14,11 +14,15 @@ from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
 
-from ..causes import Cause, cause_masks
+from ..causes import CAUSE_BITS, CAUSE_NAMES, Cause
 from ..errors import DatasetError
 from ..geometry import project_boxes
 from ..types import BOX2D_FIELDS, BOX3D_FIELDS, EgoPose, Rig
+from .arrow_columns import shared_strings, string_codes
+from .tables import SCHEMAS
 from .tracks_file import TrackRows
 
 if TYPE_CHECKING:
@@ -121,11 +125,50 @@ class GroundTruth:
         return self._keys(self.frame, self.actor_id)[self._key_order]
 
 
-def _per_camera(table, name: str, n: int, c: int, path) -> np.ndarray:
-    """``(n, c)`` column ``name`` of a per-(frame, actor, camera) table written actor-major in rig order."""
-    if table.num_rows != n * c:
-        raise DatasetError(f"{path}: {table.num_rows} rows of per-camera truth for {n} actors × {c} cameras")
-    return table.column(name).to_numpy(zero_copy_only=False).reshape(n, c)
+def _read_columns(dataset: Dataset, table: str, names: tuple[str, ...], rows: int, *,
+                  per_camera: int | None = None) -> dict[str, np.ndarray]:
+    """Columns ``names`` of ``table`` as ``(rows,)`` arrays of their schema's type, filled a row group at a time
+    (nothing but the arrays is held). ``per_camera``: the table is per (frame, actor, camera), written
+    actor-major in rig order; ``rows`` actors × ``per_camera`` cameras rows, a :class:`DatasetError` otherwise."""
+    expected = rows if per_camera is None else rows * per_camera  # a dataset without cameras: none per camera
+    found = dataset.num_rows(table)
+    if per_camera is not None and found != expected:
+        raise DatasetError(f"{dataset.path}: {found} rows of per-camera truth for {rows} actors × {per_camera} "
+                           "cameras")
+    if found != expected:
+        raise DatasetError(f"{dataset.path}: {table} has {found} rows, {expected} expected")
+    schema = SCHEMAS[table]
+    out = {name: np.empty(expected, dtype=schema.field(name).type.to_pandas_dtype()) for name in names}
+    start = 0
+    for group in dataset.batches(table, list(names)):
+        stop = start + len(group)
+        for name in names:
+            out[name][start:stop] = group.column(name).to_numpy(zero_copy_only=False)
+        start = stop
+    return out
+
+
+def _strings(dataset: Dataset, table: str, name: str) -> np.ndarray:
+    """``(R,)`` object array of a string column (:func:`~simrig.dataset.arrow_columns.shared_strings`), read a row
+    group at a time."""
+    parts = [shared_strings(group.column(name)) for group in dataset.batches(table, [name])]
+    return np.concatenate(parts) if parts else np.zeros(0, dtype=object)
+
+
+def _cause_masks(column: pa.ChunkedArray) -> np.ndarray:
+    """``(R,)`` cause bit masks of a list<string> column of cause names (:func:`simrig.causes.cause_masks`,
+    vectorised); a :class:`DatasetError` for a name that is not a cause."""
+    column = column.combine_chunks()
+    names = pc.dictionary_encode(pc.list_flatten(column))
+    lookup = dict(zip(CAUSE_NAMES, CAUSE_BITS.tolist(), strict=True))
+    unknown = sorted(set(names.dictionary.to_pylist()) - set(lookup))
+    if unknown:
+        raise DatasetError(f"sensor_truth: unknown cause(s) {unknown}")
+    bits = np.array([lookup[name] for name in names.dictionary.to_pylist()], dtype=np.int64)
+    masks = np.zeros(len(column), dtype=np.int64)
+    if len(bits):
+        np.add.at(masks, pc.list_parent_indices(column).to_numpy(), bits[names.indices.to_numpy()])
+    return masks
 
 
 SOURCE_KINDS = ("distractor", "unevaluated")
@@ -163,49 +206,52 @@ def _source_ignored(dataset: Dataset, n: int, c: int) -> np.ndarray | None:
 
 def load_ground_truth(dataset: Dataset) -> GroundTruth:
     """Read the ground truth, projections, visibility and sensor truth of ``dataset`` into a
-    :class:`GroundTruth` (vectorised; one pass over each table)."""
+    :class:`GroundTruth` (vectorised; one pass over each table, a row group at a time, nothing kept but the
+    arrays)."""
     rig = dataset.rig
     cameras = rig.camera_names
     c = len(cameras)
-    ego = dataset.table("ego_poses")
+    ego = dataset.columns("ego_poses")
     frames = ego.column("frame").to_numpy().astype(np.int64)
     ego_columns = {name: ego.column(name).to_numpy() for name in ("x", "y", "z", "yaw", "vx", "vy")}
     egos = tuple(EgoPose(*(float(ego_columns[name][i]) for name in ego_columns)) for i in range(len(frames)))
-    truth = dataset.table("ground_truth")
-    frame = truth.column("frame").to_numpy().astype(np.int64)
-    actor_id = truth.column("actor_id").to_numpy()
-    n = len(frame)
-    projections = dataset.table("projections")
-    boxes2d = np.stack([_per_camera(projections, name, n, c, dataset.path) for name in BOX2D_FIELDS], axis=-1)
+    n = dataset.num_rows("ground_truth")
+    truth = _read_columns(dataset, "ground_truth", ("frame", "actor_id", *BOX3D_FIELDS), n)
+    projections = _read_columns(dataset, "projections", (*BOX2D_FIELDS, "truncation", "depth", "in_view"), n,
+                                per_camera=c)
+    boxes2d = np.empty((n * c, 4))
+    for i, name in enumerate(BOX2D_FIELDS):
+        boxes2d[:, i] = projections.pop(name)
     ground_truth = GroundTruth(
         rig=rig,
         frames=frames,
         timestamps=ego.column("timestamp").to_numpy(),
         egos=egos,
-        events=tuple(tuple(row) for row in dataset.table("frames").column("events").to_pylist()),
-        frame=frame,
-        actor_id=actor_id,
-        label=np.asarray(truth.column("class").to_pylist(), dtype=object),
-        boxes=np.column_stack([truth.column(name).to_numpy() for name in BOX3D_FIELDS]).reshape(n, 9),
+        events=tuple(tuple(row) for row in dataset.columns("frames", ["events"]).column("events").to_pylist()),
+        frame=truth.pop("frame").astype(np.int64),
+        actor_id=truth.pop("actor_id"),
+        label=_strings(dataset, "ground_truth", "class"),
+        boxes=np.column_stack([truth.pop(name) for name in BOX3D_FIELDS]).reshape(n, 9),
         boxes2d=boxes2d.reshape(n, c, 4),
-        in_view=_per_camera(projections, "in_view", n, c, dataset.path).astype(bool),
-        truncation=_per_camera(projections, "truncation", n, c, dataset.path),
-        depth=_per_camera(projections, "depth", n, c, dataset.path),
-        occlusion=_per_camera(dataset.table("visibility"), "occlusion", n, c, dataset.path),
+        in_view=projections.pop("in_view").reshape(n, c).astype(bool),
+        truncation=projections.pop("truncation").reshape(n, c),
+        depth=projections.pop("depth").reshape(n, c),
+        occlusion=_read_columns(dataset, "visibility", ("occlusion",), n, per_camera=c)["occlusion"].reshape(n, c),
         causes=np.zeros((n, c), dtype=np.int64),
         detected=np.zeros((n, c), dtype=bool),
         probability=np.zeros((n, c)),
         source_ignored=_source_ignored(dataset, n, c),
         causes_known=dataset.causes_known,
     )
-    sensor = dataset.table("sensor_truth")
-    actor = sensor.column("actor_id").to_numpy()
-    real = actor >= 0
-    if real.any():
+    camera_of = {name: i for i, name in enumerate(cameras)}
+    for sensor in dataset.batches("sensor_truth"):
+        actor = sensor.column("actor_id").to_numpy()
+        real = actor >= 0
+        if not real.any():
+            continue
         rows = ground_truth.rows_of(sensor.column("frame").to_numpy()[real], actor[real])
-        camera_of = {name: i for i, name in enumerate(cameras)}
-        camera = np.array([camera_of[name] for name in np.asarray(sensor.column("camera").to_pylist())[real]])
-        ground_truth.causes[rows, camera] = cause_masks(sensor.column("causes").filter(real).to_pylist())
+        camera = string_codes(sensor.column("camera"), camera_of, f"{dataset.path}: sensor_truth camera")[real]
+        ground_truth.causes[rows, camera] = _cause_masks(sensor.column("causes"))[real]
         ground_truth.detected[rows, camera] = sensor.column("detection").to_numpy()[real] >= 0
         ground_truth.probability[rows, camera] = sensor.column("probability").to_numpy()[real]
     return ground_truth

@@ -5,11 +5,13 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Iterator
+from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from ..errors import DatasetError
@@ -26,8 +28,9 @@ from ..types import (
     Rig,
     SensorFrame,
 )
+from .arrow_columns import string_codes
 from .ground_truth import GroundTruth
-from .manifest import MANIFEST_NAME, folder_digest, read_manifest
+from .manifest import MANIFEST_NAME, file_sha256, folder_digest, read_manifest
 from .tables import SCHEMAS
 
 
@@ -36,11 +39,11 @@ def _stack(table: pa.Table, names: tuple[str, ...]) -> np.ndarray:
     return np.column_stack([table.column(name).to_numpy() for name in names])
 
 
-def _embedding_matrix(column: pa.ChunkedArray) -> np.ndarray:
-    """``(R, D)`` float32 embeddings from a list<float> column; a row of NaN where a detection has none."""
+def _embedding_matrix(column: pa.ChunkedArray, dimension: int) -> np.ndarray:
+    """``(R, D)`` float32 embeddings from a list<float> column whose lists hold ``dimension`` (D) values or
+    none; a row of NaN where a detection has none."""
     column = column.combine_chunks()
     lengths = np.diff(column.offsets.to_numpy())
-    dimension = int(lengths.max()) if len(lengths) else 0
     out = np.full((len(lengths), dimension), np.nan, dtype=np.float32)
     present = lengths == dimension
     if not np.all(present | (lengths == 0)):
@@ -48,6 +51,44 @@ def _embedding_matrix(column: pa.ChunkedArray) -> np.ndarray:
     if dimension:
         out[present] = column.flatten().to_numpy(zero_copy_only=False).reshape(-1, dimension)
     return out
+
+
+@dataclass(frozen=True, eq=False)
+class _DetectionChunk:
+    """Detections of consecutive frames as the arrays of :class:`~simrig.types.DetectionArrays` (rows sorted by
+    frame): frame ``(R,)``, boxes3d ``(R, 9)`` world frame, boxes2d ``(R, 4)`` [px], scores, labels and cameras
+    (codes) ``(R,)``, embeddings ``(R, D)``."""
+
+    frame: np.ndarray
+    boxes3d: np.ndarray
+    boxes2d: np.ndarray
+    scores: np.ndarray
+    labels: np.ndarray
+    cameras: np.ndarray
+    embeddings: np.ndarray
+
+    @classmethod
+    def empty(cls, dimension: int) -> _DetectionChunk:
+        return cls(np.zeros(0, np.int32), np.zeros((0, 9)), np.zeros((0, 4)), np.zeros(0), np.zeros(0, np.int64),
+                   np.zeros(0, np.int64), np.zeros((0, dimension), np.float32))
+
+    def _fields(self) -> tuple[np.ndarray, ...]:
+        return (self.frame, self.boxes3d, self.boxes2d, self.scores, self.labels, self.cameras, self.embeddings)
+
+    def joined(self, other: _DetectionChunk) -> _DetectionChunk:
+        """This chunk's rows followed by ``other``'s."""
+        return _DetectionChunk(*(np.concatenate([a, b]) for a, b in zip(self._fields(), other._fields(), strict=True)))
+
+    def from_frame(self, frame: int) -> _DetectionChunk:
+        """The rows of ``frame`` and later (views)."""
+        lo = int(np.searchsorted(self.frame, frame))
+        return _DetectionChunk(*(array[lo:] for array in self._fields())) if lo else self
+
+    def frame_arrays(self, frame: int) -> DetectionArrays:
+        """The detections of ``frame`` (views on this chunk)."""
+        lo, hi = np.searchsorted(self.frame, [frame, frame + 1])
+        return DetectionArrays(self.boxes3d[lo:hi], self.boxes2d[lo:hi], self.scores[lo:hi], self.labels[lo:hi],
+                               self.cameras[lo:hi], self.embeddings[lo:hi])
 
 
 class Dataset:
@@ -80,7 +121,7 @@ class Dataset:
         hash is checked on :meth:`open`); returns the files in the folder that the manifest does not list
         (e.g. a mosaic written by ``simrig render``), sorted, relative to the folder."""
         for name in self.manifest["files"]:
-            self._read_file(name)
+            self._check_file(name)
         images = self.manifest.get("images")
         if images is not None and folder_digest(self.path / images["folder"]) != images:
             raise DatasetError(f"{self.path}: the images under {images['folder']!r} do not match the manifest")
@@ -95,24 +136,57 @@ class Dataset:
             extra.append(path.relative_to(self.path).as_posix())
         return sorted(extra)
 
-    def _read_file(self, name: str) -> bytes:
-        """The bytes of manifest entry ``name``, checked against its SHA-256; a one-line :class:`DatasetError`
-        naming the dataset and the table when it is missing or changed."""
+    def _entry_file(self, name: str) -> Path:
+        """The file of manifest entry ``name``; a one-line :class:`DatasetError` when the manifest lists none."""
         entry = self.manifest["files"].get(name)
         if entry is None:
             raise DatasetError(f"dataset {str(self.path)!r}: the manifest lists no {name!r}")
-        file = self.path / entry["file"]
-        try:
-            data = file.read_bytes()
-        except FileNotFoundError:
-            raise DatasetError(f"dataset {str(self.path)!r}: {name} ({entry['file']}) is missing") from None
-        except OSError as error:
-            raise DatasetError(f"dataset {str(self.path)!r}: cannot read {name} ({entry['file']}): "
-                               f"{error.strerror or error}") from None
-        if hashlib.sha256(data).hexdigest() != entry["sha256"]:
+        return self.path / entry["file"]
+
+    def _check_sha256(self, name: str, digest: str) -> None:
+        entry = self.manifest["files"][name]
+        if digest != entry["sha256"]:
             raise DatasetError(f"dataset {str(self.path)!r}: {name} ({entry['file']}) does not match its SHA-256 "
                                "in the manifest (changed after it was written); regenerate the dataset")
+
+    def _unreadable(self, name: str, error: OSError) -> DatasetError:
+        entry = self.manifest["files"][name]
+        if isinstance(error, FileNotFoundError):
+            return DatasetError(f"dataset {str(self.path)!r}: {name} ({entry['file']}) is missing")
+        return DatasetError(f"dataset {str(self.path)!r}: cannot read {name} ({entry['file']}): "
+                            f"{error.strerror or error}")
+
+    def _read_file(self, name: str) -> bytes:
+        """The bytes of manifest entry ``name`` (a small side file), checked against its SHA-256; a one-line
+        :class:`DatasetError` naming the dataset and the table when it is missing or changed."""
+        file = self._entry_file(name)
+        try:
+            data = file.read_bytes()
+        except OSError as error:
+            raise self._unreadable(name, error) from None
+        self._check_sha256(name, hashlib.sha256(data).hexdigest())
         return data
+
+    def _verified_file(self, name: str) -> Path:
+        """The file of manifest entry ``name`` once its SHA-256 (hashed in blocks, never held in memory whole)
+        matches the manifest; checked once per :class:`Dataset` object. Errors as :meth:`_read_file`'s."""
+        if name not in self._verified:
+            self._check_file(name)
+            self._verified.add(name)
+        return self._entry_file(name)
+
+    def _check_file(self, name: str) -> None:
+        """Hash the file of manifest entry ``name`` in blocks and compare with the manifest."""
+        try:
+            digest = file_sha256(self._entry_file(name))
+        except OSError as error:
+            raise self._unreadable(name, error) from None
+        self._check_sha256(name, digest)
+
+    @cached_property
+    def _verified(self) -> set[str]:
+        """Manifest entries whose file matched its SHA-256."""
+        return set()
 
     # ------------------------------------------------------------------ metadata
     @property
@@ -192,26 +266,51 @@ class Dataset:
 
     def table(self, name: str) -> pa.Table:
         """One of the Parquet tables (:data:`simrig.dataset.tables.SCHEMAS`: ``ego_poses``, ``ground_truth``,
-        ``projections``, ``visibility``, ``detections``, ``sensor_truth``, ``frames``)."""
+        ``projections``, ``visibility``, ``detections``, ``sensor_truth``, ``frames``), whole, kept for the
+        next call. Long runs: :meth:`columns` and :meth:`batches` read less and keep nothing."""
+        if name not in self._tables:
+            self._tables[name] = self.columns(name)
+        return self._tables[name]
+
+    def columns(self, name: str, columns: list[str] | None = None) -> pa.Table:
+        """The ``columns`` (default: all) of table ``name``, read now and not kept (see :meth:`table`)."""
+        return self._parquet(name).read(columns=columns)
+
+    def batches(self, name: str, columns: list[str] | None = None) -> Iterator[pa.Table]:
+        """Table ``name`` (its ``columns``, default all) in its row groups, in order: a long dataset's frames a
+        group at a time (:data:`simrig.dataset.writer.FRAMES_PER_ROW_GROUP` frames each, as written)."""
+        file = self._parquet(name)
+        for group in range(file.num_row_groups):
+            yield file.read_row_group(group, columns=columns)
+
+    def num_rows(self, name: str) -> int:
+        """Rows of table ``name`` (from the Parquet footer; nothing else read)."""
+        return self._parquet(name).metadata.num_rows
+
+    def _parquet(self, name: str) -> pq.ParquetFile:
+        """Table ``name`` opened for reading, its file checked against the manifest's SHA-256 and its columns
+        against the table's schema."""
         if name not in SCHEMAS:
             raise KeyError(f"unknown table {name!r}; tables: {', '.join(SCHEMAS)}")
-        if name not in self._tables:
-            table = pq.read_table(pa.BufferReader(self._read_file(name)))
-            if not table.schema.equals(SCHEMAS[name], check_metadata=False):
-                raise DatasetError(f"dataset {str(self.path)!r}: {name} columns {table.schema.names} do not match "
-                                   "its schema")
-            self._tables[name] = table
-        return self._tables[name]
+        file = self._verified_file(name)
+        try:
+            parquet = pq.ParquetFile(file)
+        except (pa.ArrowInvalid, OSError) as error:
+            raise DatasetError(f"dataset {str(self.path)!r}: {name} is not a readable Parquet file ({error})") from None
+        if not parquet.schema_arrow.equals(SCHEMAS[name], check_metadata=False):
+            raise DatasetError(f"dataset {str(self.path)!r}: {name} columns {parquet.schema_arrow.names} do not "
+                               "match its schema")
+        return parquet
 
     @cached_property
     def _tables(self) -> dict[str, pa.Table]:
-        """Tables read so far, each checked against its SHA-256 when first read."""
+        """Tables read whole so far (:meth:`table`)."""
         return {}
 
     # ------------------------------------------------------------------ records
     def _ego_rows(self) -> list[tuple[int, float, EgoPose]]:
         """(frame, timestamp [s], ego pose) of every frame, in order."""
-        ego = self.table("ego_poses")
+        ego = self.columns("ego_poses")
         columns = {name: ego.column(name).to_numpy() for name in ego.column_names}
         fields = ("x", "y", "z", "yaw", "vx", "vy")
         return [
@@ -268,59 +367,83 @@ class Dataset:
         ``frame.detections`` builds :class:`~simrig.types.Detection` objects only if asked. When the dataset
         has images (generated with ``--images``), ``frame.images`` maps each camera to the path of its PNG for
         that frame (``images/CAMERA/FFFFFF.png``, RGB, the camera's width × height); empty otherwise."""
-        frames = self.table("frames")
-        dropped = frames.column("dropped").to_numpy(zero_copy_only=False)
-        table = self.table("detections")
-        det_frames = table.column("frame").to_numpy()
-        cameras = np.asarray(table.column("camera").to_pylist(), dtype=object)
-        boxes2d = _stack(table, BOX2D_FIELDS)
-        boxes3d = _stack(table, BOX3D_FIELDS)
-        scores = table.column("score").to_numpy()
-        labels = table.column("label").to_pylist()
+        dropped = self.columns("frames", ["dropped"]).column("dropped").to_numpy(zero_copy_only=False)
         rig = self.rig
-        camera_codes = {name: code for code, name in enumerate(rig.camera_names)}
-        camera_index = np.array([camera_codes[name] for name in cameras], dtype=np.int64)
-        label_codes = {label.value: code for code, label in enumerate(LABELS)}
-        label_index = np.array([label_codes[label] for label in labels], dtype=np.int64)
-        embeddings = _embedding_matrix(table.column("embedding"))
         images = self.image_folder
+        chunks = self._detection_chunks(rig)
+        window = next(chunks, None)
         for row, (frame, timestamp, pose) in enumerate(self._ego_rows()):
+            # Load row groups until the window holds every row of this frame (rows are sorted by frame).
+            while window is not None and (len(window.frame) == 0 or window.frame[-1] <= frame):
+                following = next(chunks, None)
+                if following is None:
+                    break
+                window = window.joined(following)
+            if window is not None:
+                window = window.from_frame(frame)
             if dropped[row]:
                 continue
-            lo, hi = np.searchsorted(det_frames, [frame, frame + 1])
+            arrays = (window.frame_arrays(frame) if window is not None
+                      else _DetectionChunk.empty(self._embedding_dimension).frame_arrays(frame))
             yield SensorFrame(
                 frame,
                 timestamp,
                 pose,
                 rig,
-                arrays=DetectionArrays(
-                    boxes3d[lo:hi], boxes2d[lo:hi], scores[lo:hi], label_index[lo:hi], camera_index[lo:hi],
-                    embeddings[lo:hi],
-                ),
+                arrays=arrays,
                 images={} if images is None else {name: str(images / name / f"{frame:06d}.png")
                                                   for name in rig.camera_names},
             )
 
+    @cached_property
+    def _embedding_dimension(self) -> int:
+        """The length of the detections' embeddings (0: none), over the whole table (one column read)."""
+        dimension = 0
+        for group in self.batches("detections", ["embedding"]):
+            lengths = pc.list_value_length(group.column("embedding")).to_numpy(zero_copy_only=False)
+            dimension = max(dimension, int(lengths.max(initial=0)))
+        return dimension
+
+    def _detection_chunks(self, rig: Rig) -> Iterator[_DetectionChunk]:
+        """The detections table a row group at a time, as the arrays a tracker is given."""
+        camera_codes = {name: code for code, name in enumerate(rig.camera_names)}
+        label_codes = {label.value: code for code, label in enumerate(LABELS)}
+        dimension = self._embedding_dimension
+        for table in self.batches("detections"):
+            yield _DetectionChunk(
+                frame=table.column("frame").to_numpy(),
+                boxes3d=_stack(table, BOX3D_FIELDS),
+                boxes2d=_stack(table, BOX2D_FIELDS),
+                scores=table.column("score").to_numpy(),
+                labels=string_codes(table.column("label"), label_codes, f"{self.path}: detections label"),
+                cameras=string_codes(table.column("camera"), camera_codes, f"{self.path}: detections camera"),
+                embeddings=_embedding_matrix(table.column("embedding"), dimension),
+            )
+
     def summary(self) -> str:
         """A few readable lines: scenario, seed, frames, actors, rig, rows, events."""
-        truth = self.table("ground_truth")
-        projections = self.table("projections")
+        truth = self.columns("ground_truth", ["frame", "actor_id", "class"])
         ids = truth.column("actor_id").to_numpy()
         class_counts = {}
         unique_ids, first = np.unique(ids, return_index=True)
         if len(truth):
-            first_classes = np.asarray(truth.column("class").to_pylist(), dtype=object)[first]
+            first_classes = np.asarray(truth.column("class").take(first).to_pylist(), dtype=object)
             names, counts = np.unique(first_classes.astype(str), return_counts=True)
             class_counts = dict(zip(names.tolist(), counts.tolist(), strict=True))
         per_frame = np.bincount(truth.column("frame").to_numpy(), minlength=self.frame_count)
-        visible = projections.column("in_view").to_numpy(zero_copy_only=False)
-        sensor_truth = self.table("sensor_truth")
-        truth_actor = sensor_truth.column("actor_id").to_numpy()
-        truth_detection = sensor_truth.column("detection").to_numpy()
-        clutter = int(np.sum(truth_actor < 0))
-        in_view_pairs = int(visible.sum())
-        missed = in_view_pairs - int(np.sum((truth_actor >= 0) & (truth_detection >= 0)))
-        dropped = int(self.table("frames").column("dropped").to_numpy(zero_copy_only=False).sum())
+        truth_rows = len(truth)
+        del truth
+        projection_rows, in_view_pairs = 0, 0
+        for group in self.batches("projections", ["in_view"]):
+            projection_rows += len(group)
+            in_view_pairs += int(group.column("in_view").to_numpy(zero_copy_only=False).sum())
+        clutter, delivered = 0, 0
+        for group in self.batches("sensor_truth", ["actor_id", "detection"]):
+            truth_actor = group.column("actor_id").to_numpy()
+            clutter += int(np.sum(truth_actor < 0))
+            delivered += int(np.sum((truth_actor >= 0) & (group.column("detection").to_numpy() >= 0)))
+        missed = in_view_pairs - delivered
+        dropped = int(self.columns("frames", ["dropped"]).column("dropped").to_numpy(zero_copy_only=False).sum())
         scenario = self.scenario
         event_text = ", ".join(f"{event['event']} at frame {event['frame']}" for event in self.manifest["events"])
         lines = [
@@ -332,9 +455,9 @@ class Dataset:
             f"({', '.join(f'{k} {v}' for k, v in class_counts.items()) or 'none'}); "
             f"{per_frame.min()}–{per_frame.max()} per frame, mean {per_frame.mean():.1f}",
             f"rig       {self.rig.name}: {', '.join(self.rig.camera_names)}",
-            f"rows      ground_truth {len(truth)}, projections {len(projections)} "
-            f"({int(visible.sum())} in view)",
-            f"sensor    {self.table('detections').num_rows} detections ({clutter} false positives), "
+            f"rows      ground_truth {truth_rows}, projections {projection_rows} "
+            f"({in_view_pairs} in view)",
+            f"sensor    {self.num_rows('detections')} detections ({clutter} false positives), "
             f"{missed} actor-camera pairs in view missed; {dropped} frames dropped; "
             f"visibility {self.manifest.get('visibility', 'not measured')}",
             f"events    {event_text or 'none'}",

@@ -31,6 +31,8 @@ import pyarrow.parquet as pq
 from simrig.errors import TracksError
 from simrig.types import BOX2D_FIELDS, BOX3D_FIELDS, ActorClass, Track
 
+from .arrow_columns import shared_strings
+
 TRACKS3D_FILE = "tracks3d.parquet"
 TRACKS2D_FILE = "tracks2d.parquet"
 _KEYS3D = ("frame", "track_id", "class", "score")
@@ -77,24 +79,59 @@ class TrackSet:
     tracks2d: TrackRows | None
 
 
-def track_tables(frames: Iterable[tuple[int, Iterable[Track]]]) -> dict[str, pa.Table]:
-    """The tables of ``(frame, tracks)`` pairs (as returned by a tracker, frame by frame), by file name:
-    ``tracks3d.parquet`` from the tracks' 3D boxes and ``tracks2d.parquet`` from their per-camera boxes (each
-    present only when some track has such boxes; both, empty, when none has)."""
-    rows3d, rows2d = [], []
-    for frame, tracks in frames:
+class TrackTables:
+    """The tables of a tracker's output, built frame by frame: :meth:`add` turns one frame's tracks into column
+    arrays at once (a few numbers per track, so a long run does not hold its :class:`~simrig.types.Track`
+    objects); :meth:`tables` joins them."""
+
+    def __init__(self) -> None:
+        self._parts3d: list[tuple[np.ndarray, ...]] = []
+        self._parts2d: list[tuple[np.ndarray, ...]] = []
+
+    def add(self, frame: int, tracks: Iterable[Track]) -> None:
+        """One frame's tracks (as a tracker returned them)."""
+        ids3d, labels3d, scores3d, boxes3d = [], [], [], []
+        cameras, ids2d, labels2d, scores2d, boxes2d = [], [], [], [], []
         for track in tracks:
             label = ActorClass(track.label).value
             if track.box3d is not None:
-                rows3d.append((frame, track.track_id, label, track.score, *track.box3d.as_array().tolist()))
+                ids3d.append(track.track_id)
+                labels3d.append(label)
+                scores3d.append(track.score)
+                boxes3d.append(track.box3d.as_array())
             for camera, box in track.boxes2d.items():
-                rows2d.append((frame, camera, track.track_id, label, track.score, *box.as_array().tolist()))
-    tables = {}
-    if rows3d or not rows2d:
-        tables[TRACKS3D_FILE] = _table(rows3d, TRACKS3D_SCHEMA)
-    if rows2d or not rows3d:
-        tables[TRACKS2D_FILE] = _table(rows2d, TRACKS2D_SCHEMA)
-    return tables
+                cameras.append(camera)
+                ids2d.append(track.track_id)
+                labels2d.append(label)
+                scores2d.append(track.score)
+                boxes2d.append(box.as_array())
+        if ids3d:
+            self._parts3d.append((np.full(len(ids3d), frame, dtype=np.int64), np.array(ids3d, dtype=np.int64),
+                                  np.array(labels3d, dtype=object), np.array(scores3d, dtype=float),
+                                  np.stack(boxes3d)))
+        if ids2d:
+            self._parts2d.append((np.full(len(ids2d), frame, dtype=np.int64), np.array(cameras, dtype=object),
+                                  np.array(ids2d, dtype=np.int64), np.array(labels2d, dtype=object),
+                                  np.array(scores2d, dtype=float), np.stack(boxes2d)))
+
+    def tables(self) -> dict[str, pa.Table]:
+        """The tables by file name: ``tracks3d.parquet`` from the tracks' 3D boxes and ``tracks2d.parquet`` from
+        their per-camera boxes (each present only when some track has such boxes; both, empty, when none has)."""
+        tables = {}
+        if self._parts3d or not self._parts2d:
+            tables[TRACKS3D_FILE] = _parts_table(self._parts3d, TRACKS3D_SCHEMA, 9)
+        if self._parts2d or not self._parts3d:
+            tables[TRACKS2D_FILE] = _parts_table(self._parts2d, TRACKS2D_SCHEMA, 4)
+        return tables
+
+
+def track_tables(frames: Iterable[tuple[int, Iterable[Track]]]) -> dict[str, pa.Table]:
+    """The tables of ``(frame, tracks)`` pairs (as returned by a tracker, frame by frame), by file name
+    (:meth:`TrackTables.tables`)."""
+    builder = TrackTables()
+    for frame, tracks in frames:
+        builder.add(frame, tracks)
+    return builder.tables()
 
 
 def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]] | dict[str, pa.Table]) -> Path:
@@ -121,7 +158,22 @@ def tracks_in_memory(tables: dict[str, pa.Table], *, frame_count: int, cameras: 
     return TrackSet(source=source, tracks3d=rows.get(TRACKS3D_FILE), tracks2d=rows.get(TRACKS2D_FILE))
 
 
+def _parts_table(parts: list[tuple[np.ndarray, ...]], schema: pa.Schema, box_size: int) -> pa.Table:
+    """One table of per-frame column arrays (the schema's columns before the box, then the ``(k, box_size)``
+    box)."""
+    keys = len(schema) - box_size
+    if parts:
+        columns = [np.concatenate([part[i] for part in parts]) for i in range(keys)]
+        boxes = np.concatenate([part[keys] for part in parts])
+    else:
+        columns, boxes = [np.zeros(0, dtype=object) for _ in range(keys)], np.zeros((0, box_size))
+    columns += [boxes[:, i] for i in range(box_size)]
+    return pa.table([pa.array(column.tolist() if column.dtype == object else column, type=field.type)
+                     for column, field in zip(columns, schema, strict=True)], schema=schema)
+
+
 def _table(rows: list[tuple], schema: pa.Schema) -> pa.Table:
+    """One table of row tuples in the schema's column order (the outside formats' readers)."""
     columns = list(zip(*rows, strict=True)) if rows else [[] for _ in schema.names]
     return pa.table([pa.array(list(column), type=field.type) for column, field in zip(columns, schema, strict=True)],
                     schema=schema)
@@ -172,6 +224,7 @@ def _rows(file: Path | str, table: pa.Table, layout: str, frame_count: int, came
         raise TracksError(f"{file}: unknown column(s) {', '.join(unknown)} (a {layout} file has: "
                           f"{', '.join(schema.names)})")
     columns = {field.name: _column(file, table, field) for field in schema}
+    del table  # only the numpy columns from here on
     frame, track_id = columns["frame"], columns["track_id"]
 
     def fail(row: int, what: str) -> None:
@@ -180,11 +233,11 @@ def _rows(file: Path | str, table: pa.Table, layout: str, frame_count: int, came
         raise TracksError(f"{file}: {where}: {what}")
 
     numeric = [name for name in schema.names if name not in ("frame", "track_id", "class", "camera")]
-    values = np.column_stack([columns[name] for name in numeric]) if len(frame) else np.zeros((0, len(numeric)))
-    bad = ~np.isfinite(values)
-    if bad.any():
-        row, col = np.argwhere(bad)[0]
-        fail(int(row), f"column {numeric[col]!r} is {values[row, col]} (must be a finite number)")
+    first_bad = [(int(np.argmin(finite)), col) for col, name in enumerate(numeric)
+                 if not (finite := np.isfinite(columns[name])).all()]
+    if first_bad:  # the first in row order, then column order
+        row, col = min(first_bad)
+        fail(row, f"column {numeric[col]!r} is {columns[numeric[col]][row]} (must be a finite number)")
     outside = np.nonzero((frame < 0) | (frame >= frame_count))[0]
     if len(outside):
         fail(int(outside[0]), f"frame {frame[outside[0]]} is not in the dataset (frames 0…{frame_count - 1})")
@@ -236,11 +289,11 @@ def _column(file: Path | str, table: pa.Table, field: pa.Field) -> np.ndarray:
     if pa.types.is_string(field.type) or pa.types.is_large_string(field.type):
         if not (pa.types.is_string(kind) or pa.types.is_large_string(kind)):
             raise TracksError(f"{file}: column {field.name!r} must hold strings, found {kind}")
-        return np.asarray(column.to_pylist(), dtype=object)
+        return shared_strings(column)
     if pa.types.is_integer(field.type):
         if not pa.types.is_integer(kind):
             raise TracksError(f"{file}: column {field.name!r} must hold integers, found {kind}")
-        return column.to_numpy().astype(np.int64)
+        return column.to_numpy().astype(np.int64, copy=False)
     if not (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
         raise TracksError(f"{file}: column {field.name!r} must hold numbers, found {kind}")
-    return column.to_numpy().astype(float)
+    return column.to_numpy().astype(float, copy=False)  # a view on the table where it already is

@@ -20,7 +20,7 @@ DENSITY_SHORTFALL = 0.8
 def ineffective_settings(scenario: Scenario, dataset: Dataset) -> list[str]:
     """One message per setting of ``scenario`` that had no (or not its full) effect on ``dataset``."""
     messages = windows_outside(scenario, dataset.frame_count)
-    truth = dataset.table("ground_truth")
+    truth = dataset.columns("ground_truth", ["frame", "actor_id"])
     ids = truth.column("actor_id").to_numpy()
     seen = set(np.unique(ids).tolist())
     for index, perturbation in enumerate(scenario.perturbations):

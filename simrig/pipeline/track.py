@@ -14,7 +14,7 @@ from pathlib import Path
 
 import simrig.trackers as tracker_registry
 from simrig.dataset import Dataset
-from simrig.dataset.tracks_file import TrackSet, track_tables, tracks_in_memory, write_tracks
+from simrig.dataset.tracks_file import TrackSet, TrackTables, tracks_in_memory, write_tracks
 from simrig.errors import SimrigError
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S, TrackerFault, checked_tracks, time_limit
 from simrig.pipeline.trust import TrackerReferenceError, import_tracker_factory
@@ -97,8 +97,11 @@ def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = No
     cameras = dataset.rig.camera_names
     with _guarded(label, "reset()", frame_time_limit_s):
         tracker.reset(rig=dataset.rig, seed=dataset.seed if seed is None else seed)
-    outputs: list[tuple[int, list[Track]]] = []
-    elapsed = 0.0
+    finish = getattr(tracker, "finish", None)
+    semi_online = callable(finish)
+    builder = TrackTables()
+    kept: list[tuple[int, list[Track]]] = []  # a semi-online tracker's answers, until finish() revises them
+    frames, rows, elapsed = 0, 0, 0.0
     for frame in dataset.sensor_frames():
         start = time.perf_counter()
         try:
@@ -107,23 +110,30 @@ def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = No
         except TrackerInputError as error:
             raise TrackingError(f"tracker {name!r}: {error}") from None
         elapsed += time.perf_counter() - start
-        outputs.append((frame.frame, checked_tracks(tracks, tracker=label, frame=frame.frame, cameras=cameras)))
-    finish = getattr(tracker, "finish", None)
-    if callable(finish):  # a semi-online tracker's final word on every frame (it may revise the past)
+        tracks = checked_tracks(tracks, tracker=label, frame=frame.frame, cameras=cameras)
+        frames += 1
+        if semi_online:
+            kept.append((frame.frame, tracks))
+        else:  # kept as a few numbers per track: memory stays small over long runs
+            builder.add(frame.frame, tracks)
+            rows += len(tracks)
+    if semi_online:  # a semi-online tracker's final word on every frame (it may revise the past)
         start = time.perf_counter()
-        limit = frame_time_limit_s * max(len(outputs), 1) if frame_time_limit_s else None
+        limit = frame_time_limit_s * max(len(kept), 1) if frame_time_limit_s else None
         with _guarded(label, "finish()", limit):
             revised = finish()
             revised = dict(revised)
         elapsed += time.perf_counter() - start
-        outputs = [(index, checked_tracks(revised[index], tracker=label, frame=index, cameras=cameras,
-                                          call="finish()") if index in revised else tracks)
-                   for index, tracks in outputs]
-    tables = track_tables(outputs)
+        for index, tracks in kept:
+            if index in revised:
+                tracks = checked_tracks(revised[index], tracker=label, frame=index, cameras=cameras, call="finish()")
+            builder.add(index, tracks)
+            rows += len(tracks)
+    tables = builder.tables()
     tracks = tracks_in_memory(tables, frame_count=dataset.frame_count, cameras=cameras,
                               source=f"tracker {label!r}")
     path = write_tracks(out, tables) if out is not None else None
-    return TrackingRun(path, len(outputs), sum(len(t) for _, t in outputs), elapsed, tracks)
+    return TrackingRun(path, frames, rows, elapsed, tracks)
 
 
 @contextmanager

@@ -77,7 +77,8 @@ class Attributor:
         previous = np.concatenate([none, events.switches[:, 3], np.full(len(events.fragmentations), -1)])
         masks = np.concatenate([fn_masks, np.array(switch_masks + frag_masks, dtype=np.int64)])
         n = len(kinds)
-        causes = ([cause_names(int(mask)) for mask in masks] if truth.causes_known else [[UNKNOWN]] * n)
+        causes = (cause_name_lists(masks) if truth.causes_known
+                  else pa.array([[UNKNOWN]] * n, type=pa.list_(pa.string())))
         return pa.table({
             "dimension": [dimension] * n, "kind": kinds, "frame": frames.astype(np.int32),
             "camera": [camera] * n, "class": [label] * n, "actor_id": actors.astype(np.int64),
@@ -118,6 +119,17 @@ class Attributor:
 
     def _actor_rows(self, actor: int) -> np.ndarray:
         return np.nonzero(self.truth.actor_id == actor)[0]
+
+
+def cause_name_lists(masks: np.ndarray) -> pa.ListArray:
+    """The list<string> column of :func:`cause_names` of each of ``(n,)`` masks, built once per distinct mask.
+
+    >>> cause_name_lists(np.array([0, int(Cause.FAR), 0])).to_pylist()
+    [['none'], ['far'], ['none']]
+    """
+    distinct, inverse = np.unique(np.asarray(masks, dtype=np.int64), return_inverse=True)
+    names = pa.array([cause_names(int(mask)) for mask in distinct], type=pa.list_(pa.string()))
+    return names.take(pa.array(inverse.reshape(-1)))
 
 
 def cause_names(mask: int) -> list[str]:

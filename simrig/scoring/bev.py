@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .sequence import FramePairs, dense_ids, frame_slices, same_frame_pairs
+from .sequence import FramePairs, dense_ids, frame_slices, kept_pairs
 from .similarity import bev_distance
 
 MATCH_DISTANCE_M = 2.0
@@ -64,13 +64,16 @@ def bev_sequence(
     gt_position = np.searchsorted(frames, np.asarray(gt_frame))
     tracker_position = np.searchsorted(frames, np.asarray(tracker_frame))
     positions = np.arange(len(frames))
-    pair_gt, pair_tracker = same_frame_pairs(
-        frame_slices(gt_position, positions), frame_slices(tracker_position, positions)
-    )
     gt_xy = np.asarray(gt_xy, dtype=float).reshape(-1, 2)
     tracker_xy = np.asarray(tracker_xy, dtype=float).reshape(-1, 2)
-    distance = bev_distance(gt_xy[pair_gt], tracker_xy[pair_tracker])
-    near = distance < MATCH_DISTANCE_M
+
+    def near(pair_gt: np.ndarray, pair_tracker: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        distance = bev_distance(gt_xy[pair_gt], tracker_xy[pair_tracker])
+        close = np.nonzero(distance < MATCH_DISTANCE_M)[0]
+        return close, distance[close]
+
+    pair_gt, pair_tracker, distance = kept_pairs(frame_slices(gt_position, positions),
+                                                 frame_slices(tracker_position, positions), near)
     gt_labels, gt_dense = dense_ids(gt_id)
     tracker_labels, tracker_dense = dense_ids(tracker_id)
     return BevSequence(
@@ -83,9 +86,9 @@ def bev_sequence(
         tracker_id=tracker_dense,
         tracker_velocity=np.asarray(tracker_velocity, dtype=float).reshape(-1, 2),
         tracker_score=np.asarray(tracker_score, dtype=float),
-        pair_gt=pair_gt[near],
-        pair_tracker=pair_tracker[near],
-        pair_distance=distance[near],
+        pair_gt=pair_gt,
+        pair_tracker=pair_tracker,
+        pair_distance=distance,
         gt_labels=gt_labels,
         tracker_labels=tracker_labels,
     )

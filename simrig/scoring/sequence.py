@@ -133,12 +133,38 @@ def same_frame_pairs(gt_slices: np.ndarray, tracker_slices: np.ndarray) -> tuple
     """
     n_gt = gt_slices[:, 1] - gt_slices[:, 0]
     n_tracker = tracker_slices[:, 1] - tracker_slices[:, 0]
-    gt_rows = np.arange(gt_slices[-1, 1] if len(gt_slices) else 0)
+    gt_rows = np.arange(gt_slices[0, 0], gt_slices[-1, 1]) if len(gt_slices) else np.zeros(0, dtype=np.int64)
     per_gt_row = np.repeat(n_tracker, n_gt)  # partners of each gt row
     first_partner = np.repeat(tracker_slices[:, 0], n_gt)
     pair_gt = np.repeat(gt_rows, per_gt_row)
     offsets = np.arange(len(pair_gt)) - np.repeat(np.cumsum(per_gt_row) - per_gt_row, per_gt_row)
     return pair_gt, np.repeat(first_partner, per_gt_row) + offsets
+
+
+FRAMES_PER_BLOCK = 256
+"""Frames whose candidate pairs are formed and measured at once: a long sequence's every same-frame pair is
+never held together, only those kept."""
+
+
+def kept_pairs(gt_slices: np.ndarray, tracker_slices: np.ndarray, measure) -> tuple[np.ndarray, ...]:
+    """The same-frame pairs that ``measure`` keeps, in :func:`same_frame_pairs` order, with their values.
+
+    ``measure(pair_gt, pair_tracker) -> (kept, values)``: of candidate pairs (row indices), the positions of
+    those to keep (increasing) and one value each. Candidates are formed :data:`FRAMES_PER_BLOCK` frames at a
+    time, so memory follows the pairs kept, not every same-frame pair of the sequence.
+
+    >>> gt, tracker, value = kept_pairs(np.array([[0, 2], [2, 3]]), np.array([[0, 1], [1, 3]]),
+    ...                                 lambda g, t: (np.nonzero(g == t)[0], (g + t)[g == t]))
+    >>> gt.tolist(), tracker.tolist(), value.tolist()
+    ([0, 2], [0, 2], [0, 4])
+    """
+    parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    for start in range(0, max(len(gt_slices), 1), FRAMES_PER_BLOCK):
+        pair_gt, pair_tracker = same_frame_pairs(gt_slices[start:start + FRAMES_PER_BLOCK],
+                                                 tracker_slices[start:start + FRAMES_PER_BLOCK])
+        kept, values = measure(pair_gt, pair_tracker)
+        parts.append((pair_gt[kept], pair_tracker[kept], values))
+    return tuple(np.concatenate(column) for column in zip(*parts, strict=True))
 
 
 def sequence_from_rows(
@@ -161,15 +187,16 @@ def sequence_from_rows(
     gt_labels, gt_dense = dense_ids(gt_id)
     tracker_labels, tracker_dense = dense_ids(tracker_id)
     positions = np.arange(len(frames))
-    pair_gt, pair_tracker = same_frame_pairs(
-        frame_slices(gt_position, positions), frame_slices(tracker_position, positions)
-    )
     gt_box = np.asarray(gt_box, dtype=float).reshape(-1, 4)
     tracker_box = np.asarray(tracker_box, dtype=float).reshape(-1, 4)
-    overlapping = np.nonzero(intersects(gt_box[pair_gt], tracker_box[pair_tracker]))[0]
-    similarity = iou(gt_box[pair_gt[overlapping]], tracker_box[pair_tracker[overlapping]])
-    keep = overlapping[similarity > 0.0]
-    similarity = similarity[similarity > 0.0]
+
+    def overlapping(pair_gt: np.ndarray, pair_tracker: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        candidates = np.nonzero(intersects(gt_box[pair_gt], tracker_box[pair_tracker]))[0]
+        similarity = iou(gt_box[pair_gt[candidates]], tracker_box[pair_tracker[candidates]])
+        return candidates[similarity > 0.0], similarity[similarity > 0.0]
+
+    pair_gt, pair_tracker, similarity = kept_pairs(frame_slices(gt_position, positions),
+                                                   frame_slices(tracker_position, positions), overlapping)
     return Sequence(
         camera=camera,
         label=label,
@@ -178,8 +205,8 @@ def sequence_from_rows(
         gt_id=gt_dense,
         tracker_frame=tracker_position,
         tracker_id=tracker_dense,
-        pair_gt=pair_gt[keep],
-        pair_tracker=pair_tracker[keep],
+        pair_gt=pair_gt,
+        pair_tracker=pair_tracker,
         pair_similarity=similarity,
         gt_labels=gt_labels,
         tracker_labels=tracker_labels,
