@@ -338,7 +338,7 @@ def _cmd_search(args: argparse.Namespace) -> int:
     try:
         result = run_search(space, sampler=args.sampler, seed=args.seed, workers=args.workers, out=args.out,
                             cache=args.cache, stop_at_failure=args.stop_at_failure, progress=not args.quiet,
-                            command=command)
+                            command=command, engine=args.engine, address=args.address)
     except KeyboardInterrupt:
         print("simrig: interrupted; every finished evaluation is kept: run the same command again to resume",
               file=sys.stderr)
@@ -472,7 +472,11 @@ def build_parser() -> argparse.ArgumentParser:
     search.add_argument("--sampler", choices=("tpe", "cmaes", "random"), default="tpe",
                         help="the optimiser (default tpe); random sampling also runs as the baseline")
     search.add_argument("--seed", type=_int_at_least(0), default=0, help="search seed (default 0)")
-    search.add_argument("--workers", type=_int_at_least(1), default=1, help="processes for an evaluation's seeds")
+    search.add_argument("--engine", choices=ENGINES, default="local",
+                        help="where an evaluation's seeds run: local processes (default) or Ray tasks")
+    search.add_argument("--workers", type=_int_at_least(1), default=1,
+                        help="processes (local) or CPUs of the local Ray instance for an evaluation's seeds")
+    search.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
     search.add_argument("--out", type=Path, default=None, help="search folder (default: runs/search/SPACE)")
     search.add_argument("--cache", type=Path, default=None, help="datasets by content key (default: OUT/datasets)")
     search.add_argument("--trust-file", action="store_true",

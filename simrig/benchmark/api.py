@@ -77,7 +77,7 @@ def _run(plan: Plan, suite: str | Path, out: Path, cache: Path, engine: str, wor
     for name in TABLES:  # from here until the end, the folder must not look finished
         (out / name).unlink(missing_ok=True)
     write_json_atomic(out / BENCH_FILE, _description(plan, suite, out, engine, cache, complete=False))
-    jobs = plan.jobs(finished(out), cache)
+    jobs = plan.jobs(finished(out), cache.absolute())  # a task may run on another node, in another folder
     workers = min(workers or machine_workers(), max(len(jobs), 1))
     results = local_engine(jobs, workers) if engine == "local" else ray_engine(jobs, workers, address)
     bar = tqdm(total=len(plan.cells), initial=len(plan.cells) - len(jobs), unit="cell", disable=not progress,

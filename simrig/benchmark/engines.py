@@ -1,5 +1,7 @@
-"""Where cells run: a local process pool (the default) or Ray tasks. Both yield (job, outcomes, dataset
-seconds) as cells finish; the caller records them, so the order of completion never reaches the results.
+"""Where cells run: a local process pool (the default) or Ray tasks (a local instance or a cluster joined at an
+address). Both yield (job, outcomes, dataset seconds) as cells finish; the caller records them, so the order
+of completion never reaches the results. The search runs an evaluation's seeds on the same two, through the
+:class:`concurrent.futures.Executor` interface (:class:`RayExecutor` for Ray).
 
 No scheduler of our own: :class:`concurrent.futures.ProcessPoolExecutor` (``spawn`` processes: pyrender's
 EGL contexts are not safe to fork) or Ray's.
@@ -16,7 +18,9 @@ from __future__ import annotations
 import multiprocessing
 import os
 from collections.abc import Iterator
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
+from contextlib import contextmanager
+from types import ModuleType
 
 from ..errors import SimrigError
 from ..lifeline import die_with
@@ -79,8 +83,32 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
 
 
 def ray_engine(jobs: list[Job], workers: int | None, address: str | None) -> Iterator[Finished]:
-    """Run ``jobs`` as Ray tasks of one CPU each. With no ``address`` (and none in ``RAY_ADDRESS``) a local
-    Ray instance of ``workers`` CPUs is started and stopped again; with one, the cluster there is joined."""
+    """Run ``jobs`` as Ray tasks of one CPU each, on the Ray of :func:`ray_session`."""
+    with ray_session(workers, address) as ray:
+        pending = {}
+        try:
+            task = ray.remote(num_cpus=1, max_retries=0)(evaluate)
+            pending = {task.remote(job): job for job in jobs}
+            while pending:
+                done, _ = ray.wait(list(pending), num_returns=1)
+                job = pending.pop(done[0])
+                try:
+                    outcomes, dataset_s = ray.get(done[0])
+                except ray.exceptions.RayTaskError as error:
+                    raise error.as_instanceof_cause() from None
+                yield job, outcomes, dataset_s
+        except KeyboardInterrupt:
+            raise Interrupted(None, len(pending)) from None
+        finally:
+            for reference in pending:
+                ray.cancel(reference, force=True)
+
+
+@contextmanager
+def ray_session(workers: int | None, address: str | None) -> Iterator[ModuleType]:
+    """The ``ray`` module, connected: to the cluster at ``address`` (or ``RAY_ADDRESS``) when one is given,
+    else to a local Ray instance of ``workers`` CPUs started here; what was started or joined here is left again
+    on exit (a Ray the caller had already initialised is used as it is and left running)."""
     try:
         import ray
     except ImportError:
@@ -88,25 +116,37 @@ def ray_engine(jobs: list[Job], workers: int | None, address: str | None) -> Ite
     started_here = not ray.is_initialized()
     if started_here:
         if address or os.environ.get("RAY_ADDRESS"):
-            ray.init(address=address, log_to_driver=False)
+            try:
+                ray.init(address=address, log_to_driver=False)
+            except ConnectionError as error:
+                raise SimrigError(f"--address {address or os.environ['RAY_ADDRESS']!r}: cannot join the Ray "
+                                  f"cluster there: {error}") from None
         else:
             ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
-    pending = {}
     try:
-        task = ray.remote(num_cpus=1, max_retries=0)(evaluate)
-        pending = {task.remote(job): job for job in jobs}
-        while pending:
-            done, _ = ray.wait(list(pending), num_returns=1)
-            job = pending.pop(done[0])
-            try:
-                outcomes, dataset_s = ray.get(done[0])
-            except ray.exceptions.RayTaskError as error:
-                raise error.as_instanceof_cause() from None
-            yield job, outcomes, dataset_s
-    except KeyboardInterrupt:
-        raise Interrupted(None, len(pending)) from None
+        yield ray
     finally:
-        for reference in pending:
-            ray.cancel(reference, force=True)
         if started_here:
             ray.shutdown()
+
+
+class RayExecutor(Executor):
+    """A :class:`concurrent.futures.Executor` whose calls run as Ray tasks of one CPU each (the search's seeds of
+    an evaluation), on the Ray of :func:`ray_session`; :meth:`shutdown` leaves it again. A task's error is
+    raised as the task's own exception type."""
+
+    def __init__(self, workers: int | None, address: str | None):
+        self._session = ray_session(workers, address)
+        self._ray = self._session.__enter__()
+        self._tasks: dict = {}
+
+    def submit(self, fn, /, *args, **kwargs) -> Future:
+        task = self._tasks.get(fn)
+        if task is None:
+            task = self._tasks[fn] = self._ray.remote(num_cpus=1, max_retries=0)(fn)
+        return task.remote(*args, **kwargs).future()
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        if self._session is not None:
+            session, self._session = self._session, None
+            session.__exit__(None, None, None)

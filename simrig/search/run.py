@@ -23,6 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from simrig.benchmark.api import folder_lock
+from simrig.benchmark.engine_names import ENGINES
+from simrig.benchmark.engines import RayExecutor
 from simrig.benchmark.evaluate import METRIC_COLUMNS
 
 from ..dataset.manifest import write_json_atomic
@@ -61,14 +63,18 @@ class SearchRun:
 def run_search(space: SearchSpace | str | Path, *, sampler: str = "tpe", seed: int = 0, workers: int = 1,
                out: Path | str | None = None, cache: Path | str | None = None, baseline: bool = True,
                shrink_budget: int = 60, stop_at_failure: bool = False, progress: bool = False,
-               command: str | None = None) -> SearchRun:
+               command: str | None = None, engine: str = "local", address: str | None = None) -> SearchRun:
     """Search ``space`` (a :class:`SearchSpace`, catalog name or file) with ``sampler`` seeded by ``seed``, and
-    random sampling at the same budget when ``baseline``; ``workers`` processes run an evaluation's seeds;
+    random sampling at the same budget when ``baseline``; an evaluation's seeds run on ``engine``: ``local``
+    (``workers`` processes; in this process with 1) or ``ray`` (Ray tasks: the cluster at ``address`` or
+    ``RAY_ADDRESS``, else a local instance of ``workers`` CPUs) — the same evaluations either way;
     ``stop_at_failure`` ends each sampler at its first failing evaluation (how soon a sampler finds one).
     Everything goes to ``out`` (default ``runs/search/NAME``); datasets to ``cache`` (default ``OUT/datasets``).
     A rerun with the same settings resumes; with other settings it is an error naming the folder."""
     if sampler not in SAMPLERS:
         raise SearchError(f"--sampler {sampler!r}: choose one of {', '.join(SAMPLERS)}")
+    if engine not in ENGINES:
+        raise SearchError(f"--engine {engine!r}: choose one of {', '.join(ENGINES)}")
     if workers < 1:
         raise SearchError(f"--workers {workers}: must be at least 1")
     if not isinstance(space, SearchSpace):
@@ -77,8 +83,8 @@ def run_search(space: SearchSpace | str | Path, *, sampler: str = "tpe", seed: i
     cache = Path(cache) if cache is not None else out / "datasets"
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out):
-        return _run(space, sampler, seed, workers, out, cache, baseline, shrink_budget, stop_at_failure, progress,
-                    command)
+        return _run(space, sampler, seed, (engine, workers, address), out, cache, baseline, shrink_budget,
+                    stop_at_failure, progress, command)
 
 
 def _settings(space: SearchSpace, sampler: str, seed: int, baseline: bool, stop_at_failure: bool) -> dict:
@@ -86,8 +92,8 @@ def _settings(space: SearchSpace, sampler: str, seed: int, baseline: bool, stop_
             "stop_at_failure": stop_at_failure}
 
 
-def _run(space: SearchSpace, sampler: str, seed: int, workers: int, out: Path, cache: Path, baseline: bool,
-         shrink_budget: int, stop_at_failure: bool, progress: bool, command: str | None) -> SearchRun:
+def _run(space: SearchSpace, sampler: str, seed: int, engine: tuple[str, int, str | None], out: Path, cache: Path,
+         baseline: bool, shrink_budget: int, stop_at_failure: bool, progress: bool, command: str | None) -> SearchRun:
     from tqdm import tqdm
 
     from .report import write_report, write_results
@@ -109,7 +115,7 @@ def _run(space: SearchSpace, sampler: str, seed: int, workers: int, out: Path, c
     config = space.config
     total = config.budget * len(streams) + config.confirm_top
     done_before = sum(len(read_evaluations(out, s)) for s in (*streams, CONFIRM))
-    pool = _pool(workers)
+    pool = _pool(*engine)
     evaluated_now = 0
     try:
         with tqdm(total=total, initial=done_before, unit="eval", disable=not progress,
@@ -134,7 +140,10 @@ def _run(space: SearchSpace, sampler: str, seed: int, workers: int, out: Path, c
     return SearchRun(out, evaluations, first, evaluated_now, worst)
 
 
-def _pool(workers: int) -> Executor | None:
+def _pool(engine: str, workers: int, address: str | None) -> Executor | None:
+    """Where an evaluation's seeds run: None (this process), a pool of spawned processes, or Ray tasks."""
+    if engine == "ray":
+        return RayExecutor(workers, address)
     if workers == 1:
         return None
     import multiprocessing
@@ -148,7 +157,7 @@ def evaluate(space: SearchSpace, stream: str, index: int, candidate: Candidate, 
     """Run ``candidate`` on every seed (in ``pool`` when given) and collect every metric per seed."""
     scenario = space.scenario_for(candidate)
     started = time.perf_counter()
-    arguments = [(scenario, s, space.tracker, space.params, str(cache)) for s in seeds]
+    arguments = [(scenario, s, space.tracker, space.params, str(cache.absolute())) for s in seeds]  # any node
     if pool is None:
         per_seed = [run_seed(*a) for a in arguments]
     else:
@@ -197,9 +206,15 @@ def _distributions(space: SearchSpace) -> dict:
 
 
 def startup_trials(budget: int) -> int:
-    """Random proposals before a model-based sampler takes over: a tenth of the budget, 3 … 10 (Optuna's
-    default is 10 whatever the budget, which leaves a small budget nearly all random)."""
-    return min(10, max(3, budget // 10))
+    """Random proposals before a model-based sampler takes over: a twentieth of the budget, 3 … 5. Optuna's
+    default is 10 whatever the budget; every start-up proposal is one the optimiser does not steer, and
+    multivariate TPE works from a handful of points, so a search for a rare failure gains from starting to
+    model early (tests/perf/search_planted.py).
+
+    >>> [startup_trials(b) for b in (8, 40, 80, 100, 1000)]
+    [3, 3, 4, 5, 5]
+    """
+    return min(5, max(3, budget // 20))
 
 
 def _sampler(stream: str, seed: int, index: int, budget: int):
