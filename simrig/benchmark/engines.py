@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
 from ..errors import SimrigError
@@ -42,17 +42,39 @@ def machine_workers() -> int:
 def local_engine(jobs: list[Job], workers: int) -> Iterator[Finished]:
     """Run ``jobs`` in a pool of ``workers`` spawned processes. An error cancels what has not started and
     waits for the running cells; Ctrl-C stops the running workers at once and raises :class:`Interrupted`."""
+    results = local_map(evaluate, jobs, workers)
+    try:
+        for job, (outcomes, dataset_s) in results:
+            yield job, outcomes, dataset_s
+    finally:
+        results.close()
+
+
+def ray_engine(jobs: list[Job], workers: int | None, address: str | None) -> Iterator[Finished]:
+    """Run ``jobs`` as Ray tasks of one CPU each. With no ``address`` (and none in ``RAY_ADDRESS``) a local
+    Ray instance of ``workers`` CPUs is started and stopped again; with one, the cluster there is joined."""
+    results = ray_map(evaluate, jobs, workers, address)
+    try:
+        for job, (outcomes, dataset_s) in results:
+            yield job, outcomes, dataset_s
+    finally:
+        results.close()
+
+
+def local_map(function: Callable, items: list, workers: int) -> Iterator[tuple]:
+    """``(item, function(item))`` for every item, as they finish, from a pool of ``workers`` spawned
+    processes (``function`` must be importable by name). An error cancels what has not started and waits for
+    the running items; Ctrl-C stops the running workers at once and raises :class:`Interrupted`."""
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
                                initializer=die_with, initargs=(os.getpid(),))
     pending = {}
     try:
-        pending = {pool.submit(evaluate, job): job for job in jobs}
+        pending = {pool.submit(function, item): item for item in items}
         while pending:
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in done:
-                job = pending.pop(future)
-                outcomes, dataset_s = future.result()
-                yield job, outcomes, dataset_s
+                item = pending.pop(future)
+                yield item, future.result()
     except KeyboardInterrupt:
         # a future counts as running once queued to the pool (up to one extra per worker): at most one per worker
         running = min(sum(future.running() for future in pending), workers)
@@ -78,9 +100,10 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
             process.kill()
 
 
-def ray_engine(jobs: list[Job], workers: int | None, address: str | None) -> Iterator[Finished]:
-    """Run ``jobs`` as Ray tasks of one CPU each. With no ``address`` (and none in ``RAY_ADDRESS``) a local
-    Ray instance of ``workers`` CPUs is started and stopped again; with one, the cluster there is joined."""
+def ray_map(function: Callable, items: list, workers: int | None, address: str | None) -> Iterator[tuple]:
+    """``(item, function(item))`` for every item, as they finish, as Ray tasks of one CPU each. With no
+    ``address`` (and none in ``RAY_ADDRESS``) a local Ray instance of ``workers`` CPUs is started and stopped
+    again; with one, the cluster there is joined."""
     try:
         import ray
     except ImportError:
@@ -93,16 +116,16 @@ def ray_engine(jobs: list[Job], workers: int | None, address: str | None) -> Ite
             ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
     pending = {}
     try:
-        task = ray.remote(num_cpus=1, max_retries=0)(evaluate)
-        pending = {task.remote(job): job for job in jobs}
+        task = ray.remote(num_cpus=1, max_retries=0)(function)
+        pending = {task.remote(item): item for item in items}
         while pending:
             done, _ = ray.wait(list(pending), num_returns=1)
-            job = pending.pop(done[0])
+            item = pending.pop(done[0])
             try:
-                outcomes, dataset_s = ray.get(done[0])
+                result = ray.get(done[0])
             except ray.exceptions.RayTaskError as error:
                 raise error.as_instanceof_cause() from None
-            yield job, outcomes, dataset_s
+            yield item, result
     except KeyboardInterrupt:
         raise Interrupted(None, len(pending)) from None
     finally:
