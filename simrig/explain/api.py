@@ -83,40 +83,14 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     record = _tracker_record(run_dir, label)
     scenario = scenario_from_record(dataset.scenario)
     known = all_groups(scenario)
-    if causes:
-        unknown = [name for name in causes if name not in known]
-        if unknown:
-            raise ExplainError(f"--causes: unknown cause group {unknown[0]!r}; {scenario.name!r} has: "
-                               f"{', '.join(known)}")
-        players = tuple(dict.fromkeys(causes))
     present = present_groups(scenario, len(dataset.rig.cameras))
-    if not causes:
-        players = present
+    players = _players(causes, known, present, scenario.name)
     has_3d = (run_dir / TRACKS_DIR / label / "tracks3d.parquet").exists() and record["camera"] is None
     chosen = _metrics(metrics, has_3d)
-    if samples is not None and samples < 2:
-        raise ExplainError(f"--samples: at least 2 permutations are needed for an interval, got {samples}")
-    exact = samples is None and len(players) <= EXACT_LIMIT
-    orders = None if exact else sample_orders(players, samples or DEFAULT_SAMPLES, dataset.seed)
-    singles = {frozenset({p}) for p in players}
-    needed = set(all_coalitions(players)) if exact else prefixes(orders) | singles | {frozenset(players)}
-    needed |= {frozenset()}
-    keep_errors = singles | {frozenset()}
-    tasks = [CoalitionTask(str(run_dir / DATASET_DIR), record["tracker"], tuple(sorted(record["params"].items())),
-                           record["camera"], tuple(sorted(c)), tuple(chosen.values()), c in keep_errors,
-                           str(run_dir / EXPLAIN_DIR / CACHE_DIR))
-             for c in sorted(needed, key=lambda c: (len(c), sorted(c)))]
-    results = {frozenset(result.removed): result for result in _run(tasks, engine, workers, address)}
-    values = {c: r.values for c, r in results.items()}
-    actual, perfect = values[frozenset()], values[frozenset(players)]
-    if exact:
-        shares, half = exact_shares(players, values) if players else {}, None
-    else:
-        sampled = sampled_shares(players, orders, values)
-        shares, half = sampled.shares, sampled.half_width
-    verdicts = _verdicts(run_dir, label, players, results)
-    document = _document(scenario.name, dataset, label, record, chosen, players, known, present, actual, perfect,
-                         shares, half, exact, orders, len(results), verdicts, run_dir)
+    game = play(dataset, record, players, chosen, samples, run_dir / EXPLAIN_DIR / CACHE_DIR, engine=engine,
+                workers=workers, address=address, verdicts=True)
+    verdicts = _verdicts(run_dir, label, players, game.results)
+    document = _document(scenario.name, dataset, label, record, chosen, known, present, game, verdicts, run_dir)
     out = run_dir / EXPLAIN_DIR / label
     out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out / "explain.json", document)
@@ -126,7 +100,80 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     pq.write_table(verdicts["table"], partial)
     partial.replace(out / "verdicts.parquet")
     plots = tuple(waterfall(document, name, out / f"waterfall-{_file_name(name)}.png") for name in chosen)
-    return ExplainResult(out, document, table, plots, len(results), time.perf_counter() - started)
+    return ExplainResult(out, document, table, plots, len(game.results), time.perf_counter() - started)
+
+
+@dataclass(frozen=True)
+class Game:
+    """The coalitions run (``results`` by removed groups) and the groups' shares ``{group: (M,)}`` of the
+    chosen metrics, with the 95 % half-widths when sampled (``half`` None when exact)."""
+
+    players: tuple[str, ...]
+    exact: bool
+    orders: list[tuple[str, ...]] | None
+    results: dict[Coalition, CoalitionResult]
+    shares: dict[str, np.ndarray]
+    half: dict[str, np.ndarray] | None
+
+    @property
+    def actual(self) -> np.ndarray:
+        return self.results[frozenset()].values
+
+    @property
+    def perfect(self) -> np.ndarray:
+        return self.results[frozenset(self.players)].values
+
+    def metrics(self, chosen: dict[str, tuple[str, str]]) -> dict[str, dict]:
+        """``{metric: {dimension, actual, perfect, shares, residual[, ci95]}}`` (JSON-ready, NaN as None)."""
+        out = {}
+        for i, name in enumerate(chosen):
+            share = {p: float(self.shares[p][i]) for p in self.players}
+            gap = float(self.perfect[i] - self.actual[i])
+            entry = {"dimension": chosen[name][0], "actual": _number(self.actual[i]),
+                     "perfect": _number(self.perfect[i]), "shares": {p: _number(v) for p, v in share.items()},
+                     "residual": _number(gap - sum(share.values()))}
+            if self.half is not None:
+                entry["ci95"] = {p: _number(self.half[p][i]) for p in self.players}
+            out[name] = entry
+        return out
+
+
+def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[str, tuple[str, str]],
+         samples: int | None, scratch: Path, *, engine: str = "local", workers: int | None = None,
+         address: str | None = None, verdicts: bool = False) -> Game:
+    """Run the coalitions the Shapley values of ``players`` need on ``dataset`` with the tracker of ``record``
+    (counterfactual datasets cached in ``scratch``) and compute them: exact when ``samples`` is None and there
+    are at most :data:`EXACT_LIMIT` players, else from ``samples`` (default :data:`DEFAULT_SAMPLES`) sampled
+    permutations. ``verdicts``: also run each single removal and keep the error keys of those and the actual."""
+    if samples is not None and samples < 2:
+        raise ExplainError(f"--samples: at least 2 permutations are needed for an interval, got {samples}")
+    exact = samples is None and len(players) <= EXACT_LIMIT
+    orders = None if exact else sample_orders(players, samples or DEFAULT_SAMPLES, dataset.seed)
+    singles = {frozenset({p}) for p in players} if verdicts else set()
+    needed = set(all_coalitions(players)) if exact else prefixes(orders) | singles
+    needed |= {frozenset(), frozenset(players)}
+    keep_errors = singles | {frozenset()} if verdicts else set()
+    tasks = [CoalitionTask(str(dataset.path), record["tracker"], tuple(sorted(record["params"].items())),
+                           record["camera"], tuple(sorted(c)), tuple(chosen.values()), c in keep_errors, str(scratch))
+             for c in sorted(needed, key=lambda c: (len(c), sorted(c)))]
+    results = {frozenset(result.removed): result for result in _run(tasks, engine, workers, address)}
+    values = {c: r.values for c, r in results.items()}
+    if exact:
+        shares, half = exact_shares(players, values) if players else {}, None
+    else:
+        sampled = sampled_shares(players, orders, values)
+        shares, half = sampled.shares, sampled.half_width
+    return Game(players, exact, orders, results, shares, half)
+
+
+def _players(causes: list[str] | None, known: tuple[str, ...], present: tuple[str, ...],
+             scenario: str) -> tuple[str, ...]:
+    if not causes:
+        return present
+    unknown = [name for name in causes if name not in known]
+    if unknown:
+        raise ExplainError(f"--causes: unknown cause group {unknown[0]!r}; {scenario!r} has: {', '.join(known)}")
+    return tuple(dict.fromkeys(causes))
 
 
 def _dataset(run_dir: Path) -> Dataset:
@@ -227,20 +274,9 @@ def _verdicts(run_dir: Path, label: str, players: tuple[str, ...],
     return {"table": table, "counts": counts}
 
 
-def _document(scenario: str, dataset: Dataset, label: str, record: dict, chosen: dict, players: tuple[str, ...],
-              known: tuple[str, ...], present: tuple[str, ...], actual: np.ndarray, perfect: np.ndarray,
-              shares: dict, half: dict | None, exact: bool, orders, coalitions: int, verdicts: dict,
-              run_dir: Path) -> dict:
-    metrics = {}
-    for i, name in enumerate(chosen):
-        share = {p: float(shares[p][i]) for p in players}
-        gap = float(perfect[i] - actual[i])
-        entry = {"dimension": chosen[name][0], "actual": _number(actual[i]), "perfect": _number(perfect[i]),
-                 "shares": {p: _number(v) for p, v in share.items()},
-                 "residual": _number(gap - sum(share.values()))}
-        if half is not None:
-            entry["ci95"] = {p: _number(half[p][i]) for p in players}
-        metrics[name] = entry
+def _document(scenario: str, dataset: Dataset, label: str, record: dict, chosen: dict, known: tuple[str, ...],
+              present: tuple[str, ...], game: Game, verdicts: dict, run_dir: Path) -> dict:
+    players, exact, orders = game.players, game.exact, game.orders
     words = ["simrig", "explain", "RUN_DIR", "--label", label, "--metric", ",".join(chosen)]
     words += ["--causes", ",".join(players)] if players else []
     words += [] if exact else ["--samples", str(len(orders))]
@@ -248,10 +284,10 @@ def _document(scenario: str, dataset: Dataset, label: str, record: dict, chosen:
         "scenario": scenario, "seed": dataset.seed, "frames": dataset.frame_count, "label": label,
         "tracker": record["tracker"], "params": record["params"], "camera": record["camera"],
         "mode": "exact" if exact else "sampled", "samples": None if exact else len(orders),
-        "coalitions": coalitions, "causes": list(players),
+        "coalitions": len(game.results), "causes": list(players),
         "null_causes": [name for name in known if name not in present and name not in players],
         "kept_on": [name for name in present if name not in players],
-        "metrics": metrics, "verdicts": verdicts["counts"],
+        "metrics": game.metrics(chosen), "verdicts": verdicts["counts"],
         "command": shlex.join(words).replace("RUN_DIR", shlex.quote(str(run_dir))),
     }
 
