@@ -327,6 +327,12 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     print(f"bench     {result.out}: {result.points} points, {result.cells} cells ({result.cells_skipped} finished "
           f"earlier, {result.cells_run} run now), {result.rows} result rows")
     print(f"results   {result.results}")
+    if args.explain:
+        from .explain.bench import explain_bench
+
+        path = explain_bench(result.out, samples=args.explain_samples, engine=args.engine, workers=args.workers,
+                             address=args.address, progress=not args.quiet)
+        print(f"explain   {path}: what each cause costs every tracker on the base cells")
     print(f"report    simrig report {result.out}")
     return 0
 
@@ -469,6 +475,11 @@ def build_parser() -> argparse.ArgumentParser:
                        help="datasets by content key, shareable between suites (default: OUT/datasets)")
     bench.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
+    bench.add_argument("--explain", action="store_true",
+                       help="then explain every tracker on every base cell (simrig explain; the report's 'What each "
+                            "cause costs' section)")
+    bench.add_argument("--explain-samples", type=_int_at_least(2), default=None, metavar="N",
+                       help="permutations --explain samples (default: exact up to 7 cause groups, else 12)")
     _trust_argument(bench, "the suite file")
     bench.set_defaults(run=_cmd_bench)
 

@@ -86,7 +86,7 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     present = present_groups(scenario, len(dataset.rig.cameras))
     players = _players(causes, known, present, scenario.name)
     has_3d = (run_dir / TRACKS_DIR / label / "tracks3d.parquet").exists() and record["camera"] is None
-    chosen = _metrics(metrics, has_3d)
+    chosen = choose_metrics(metrics, has_3d)
     game = play(dataset, record, players, chosen, samples, run_dir / EXPLAIN_DIR / CACHE_DIR, engine=engine,
                 workers=workers, address=address, verdicts=True)
     verdicts = _verdicts(run_dir, label, players, game.results)
@@ -221,7 +221,7 @@ def _tracker_record(run_dir: Path, label: str) -> dict:
     return {"tracker": tracker, "params": params, "camera": camera}
 
 
-def _metrics(names: list[str] | None, has_3d: bool) -> dict[str, tuple[str, str]]:
+def choose_metrics(names: list[str] | None, has_3d: bool) -> dict[str, tuple[str, str]]:
     """Display name → (dimension, metric name)."""
     names = list(names or (DEFAULT_METRICS_3D if has_3d else DEFAULT_METRICS_2D))
     chosen = {}
