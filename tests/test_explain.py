@@ -172,3 +172,28 @@ def test_a_tracker_that_cannot_be_recreated_is_one_line(tmp_path, run_folder, ca
     assert err.startswith("simrig: error: ") and message in err and err.count("\n") == 1
     with pytest.raises(ExplainError):
         explain(copy)
+
+
+def test_run_with_explain_adds_the_section_to_the_reports(tmp_path, capsys):
+    """``simrig run ... --explain``: the run, then its explanation in scores/LABEL/report.md and report.md."""
+    path = tmp_path / "quiet.toml"
+    path.write_text(
+        'extends = "highway_surround6"\nframes = 15\n'
+        "[traffic]\nvehicles = 8\nwindow_radius_m = 80.0\nspawn_min_distance_m = 50.0\n"
+        "[render]\nvisibility = false\n"
+        "[sensor.detection]\nprobability = 1.0\n"
+        "[sensor.clutter]\nrate_per_frame = 0.0\n"
+        "[sensor.embedding]\nsigma = 0.0\nocclusion_sigma = 0.0\n"
+    )
+    out = tmp_path / "run"
+    assert main(["run", str(path), "--tracker", "saga", "--out", str(out), "--explain", "--workers", "1",
+                 "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    assert "explain   saga on quiet, seed 0, 15 frames: exact Shapley values" in printed
+    document = json.loads((out / "explain" / "saga" / "explain.json").read_text())
+    section = (out / "scores" / "saga" / "report.md").read_text().split("### What each cause cost saga")[1]
+    assert f"{document['metrics']['AMOTA']['actual']:.3f}" in section
+    assert "### What each cause cost saga" in (out / "report.md").read_text()
+    # a second run of the same tracker rewrites its report; the explanation is asked for again
+    assert main(["run", str(path), "--tracker", "saga", "--out", str(out), "--quiet"]) == 0
+    assert "What each cause cost" not in (out / "scores" / "saga" / "report.md").read_text()
