@@ -197,3 +197,13 @@ def test_run_with_explain_adds_the_section_to_the_reports(tmp_path, capsys):
     # a second run of the same tracker rewrites its report; the explanation is asked for again
     assert main(["run", str(path), "--tracker", "saga", "--out", str(out), "--quiet"]) == 0
     assert "What each cause cost" not in (out / "scores" / "saga" / "report.md").read_text()
+
+
+def test_a_run_that_was_not_scored_is_one_line(tmp_path, run_folder, capsys):
+    import shutil
+
+    shutil.copytree(run_folder / "dataset", tmp_path / "run" / "dataset")
+    shutil.copytree(run_folder / "tracks", tmp_path / "run" / "tracks")
+    assert main(["explain", str(tmp_path / "run")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("simrig: error: ") and "no errors.parquet" in err and err.count("\n") == 1

@@ -81,6 +81,9 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     dataset = _dataset(run_dir)
     label = _label(run_dir, label)
     record = _tracker_record(run_dir, label)
+    if not (run_dir / SCORES_DIR / label / "errors.parquet").is_file():
+        raise ExplainError(f"{run_dir / SCORES_DIR / label}: no errors.parquet (the run was not scored; run "
+                           "'simrig run' again into this folder)")
     scenario = scenario_from_record(dataset.scenario)
     known = all_groups(scenario)
     present = present_groups(scenario, len(dataset.rig.cameras))
