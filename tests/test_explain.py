@@ -124,6 +124,8 @@ def test_planted_occlusion_takes_the_identity_switch_and_miss_loss_of_sort(tmp_p
     result = explain(tmp_path / "run", metrics=["IDSW", "CLR_FN"], workers=1)
     document = result.document
     assert "occlude#0" in document["causes"] and document["mode"] == "exact"
+    # scored per camera in 2D, another camera's detection of the actor is no duplicate: not a cause here
+    assert "cross_camera" not in document["causes"] and "cross_camera" in document["null_causes"]
     for name in ("IDSW", "CLR_FN"):
         entry = document["metrics"][name]
         loss = entry["perfect"] - entry["actual"]

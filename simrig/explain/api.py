@@ -86,9 +86,9 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
                            "'simrig run' again into this folder)")
     scenario = scenario_from_record(dataset.scenario)
     known = all_groups(scenario)
-    present = present_groups(scenario, len(dataset.rig.cameras))
-    players = _players(causes, known, present, scenario.name)
     has_3d = (run_dir / TRACKS_DIR / label / "tracks3d.parquet").exists() and record["camera"] is None
+    present = present_groups(scenario, len(dataset.rig.cameras), scored_in_3d=has_3d)
+    players = _players(causes, known, present, scenario.name)
     chosen = choose_metrics(metrics, has_3d)
     game = play(dataset, record, players, chosen, samples, run_dir / EXPLAIN_DIR / CACHE_DIR, engine=engine,
                 workers=workers, address=address, verdicts=True)
@@ -345,7 +345,7 @@ def explain_table(document: dict) -> str:
     lines.append("residual".ljust(width) + "".join(
         (f"{metrics[n]['residual']:.1e}" if metrics[n]["residual"] is not None else "-").rjust(cell) for n in names))
     if document["null_causes"]:
-        lines.append("absent from the scenario (share 0 exactly): " + ", ".join(document["null_causes"]))
+        lines.append("not an imperfection here (share 0 exactly): " + ", ".join(document["null_causes"]))
     if document["kept_on"]:
         lines.append("not in --causes (on in every run): " + ", ".join(document["kept_on"]))
     for dimension, kinds in document["verdicts"].items():

@@ -55,7 +55,7 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
         record = {"tracker": entry["tracker"], "params": entry.get("params") or {}, "camera": entry.get("camera")}
         dataset = Dataset.open(Path(description["cache"]) / cell)
         scenario = scenario_from_record(dataset.scenario)
-        players = present_groups(scenario, len(dataset.rig.cameras))
+        players = present_groups(scenario, len(dataset.rig.cameras), scored_in_3d=scored == "3d")
         chosen = choose_metrics(metrics, scored == "3d")
         game = play(dataset, record, players, chosen, samples, out / EXPLAIN_CACHE / cell, engine=engine,
                     workers=workers, address=address)

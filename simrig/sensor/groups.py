@@ -19,7 +19,9 @@ group              removing it
 ``reid``           the embedding is the actor's noise-free appearance
 ``duplicates``     same-camera duplicate boxes (failed NMS) are drawn but not reported
 ``cross_camera``   an actor detected by several cameras is reported by the best one only (largest visible
-                   fraction × (1 − truncation), then largest true box, then rig order)
+                   fraction × (1 − truncation), then largest true box, then rig order) — an imperfection only
+                   for a tracker scored in 3D: scored per camera in 2D, each camera's ground truth holds the
+                   actor, so the other cameras' detections are not duplicates there
 ``KIND#I``         scheduled sensor perturbation ``I`` of the scenario (e.g. ``occlude#0``) is not applied
 ================== ==========================================================================================
 """
@@ -46,9 +48,10 @@ def all_groups(scenario: Scenario) -> tuple[str, ...]:
     return DETECTOR_GROUPS + window_groups(scenario)
 
 
-def present_groups(scenario: Scenario, camera_count: int) -> tuple[str, ...]:
-    """The groups whose removal can change ``scenario``'s detections (a rig of ``camera_count`` cameras); the
-    others are null causes whose Shapley share is exactly 0 without running anything."""
+def present_groups(scenario: Scenario, camera_count: int, scored_in_3d: bool = True) -> tuple[str, ...]:
+    """The groups that are imperfections of ``scenario``'s detector (a rig of ``camera_count`` cameras, for a
+    tracker scored in 3D or, ``scored_in_3d`` false, per camera in 2D); the others change nothing and their
+    Shapley share is exactly 0 without running anything."""
     s = scenario.sensor
     d, b3 = s.detection, s.box3d
     present = {
@@ -64,7 +67,7 @@ def present_groups(scenario: Scenario, camera_count: int) -> tuple[str, ...]:
         "reid": s.embedding.sigma > 0 or s.embedding.target_auc is not None or s.embedding.occlusion_sigma > 0
                 or s.embedding.truncation_sigma > 0,
         "duplicates": s.duplicates.probability > 0,
-        "cross_camera": camera_count > 1,
+        "cross_camera": camera_count > 1 and scored_in_3d,
     }
     return tuple(name for name in DETECTOR_GROUPS if present[name]) + window_groups(scenario)
 
