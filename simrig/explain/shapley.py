@@ -9,7 +9,8 @@ The game: ``u(R)`` = a vector of metric values when the cause groups ``R`` are r
 group whose removal never changes anything gets 0 (null player). Sampled: φ_i is the mean marginal
 u(P_i ∪ {i}) − u(P_i) over random orders of the groups, P_i the groups before i (Castro, Gómez and Tejada,
 "Polynomial calculation of the Shapley value based on sampling", 2009); each order is paired with its
-reverse (antithetic sampling), and the half-width of a 95 % normal confidence interval is given per group.
+reverse (antithetic sampling), and the half-width of a 95 % confidence interval is given per group (Student's t
+over the pairs' means: with few pairs a normal quantile would understate it badly).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import t as student_t
 
 Coalition = frozenset[str]
 
@@ -95,6 +97,6 @@ def sampled_shares(players: Sequence[str], orders: Sequence[Sequence[str]],
         pairs = rows.reshape(-1, 2, *rows.shape[1:]).mean(axis=1) if len(rows) % 2 == 0 else rows
         shares[player] = rows.mean(axis=0)
         n = len(pairs)
-        half[player] = (1.959963984540054 * pairs.std(axis=0, ddof=1) / math.sqrt(n) if n > 1
+        half[player] = (student_t.ppf(0.975, n - 1) * pairs.std(axis=0, ddof=1) / math.sqrt(n) if n > 1
                         else np.full(rows.shape[1:], np.inf))
     return SampledShares(shares, half)
