@@ -198,3 +198,12 @@ def windows_outside(scenario: Scenario, frames: int) -> list[str]:
             messages.append(f"perturbations.{index} ({perturbation.kind}) starts at frame {first}, after the last "
                             f"of the {frames} frames generated: it has no effect")
     return messages
+
+
+def scenario_from_record(record: dict) -> Scenario:
+    """The :class:`Scenario` of a resolved dump (``model_dump(mode="json")``, as a dataset manifest records
+    it): the rig keys its preset does not take are dropped (the dump holds every field; their values there
+    are the defaults, which the preset ignores), everything else validated as usual."""
+    rig = dict(record.get("rig", {}))
+    allowed = _PRESET_KEYS.get(rig.get("preset", "surround6"), set()) | {"preset"}
+    return Scenario.model_validate({**record, "rig": {key: value for key, value in rig.items() if key in allowed}})

@@ -86,4 +86,10 @@ def with_preset(raw: dict[str, Any]) -> dict[str, Any]:
     sensor = raw.get("sensor")
     if not isinstance(sensor, dict) or not isinstance(sensor.get("preset"), str) or sensor["preset"] not in PRESETS:
         return raw
-    return {**raw, "sensor": merge_tables(PRESETS[sensor["preset"]], sensor)}
+    merged = merge_tables(PRESETS[sensor["preset"]], sensor)
+    rows = sensor.get("confusion", {}).get("matrix") if isinstance(sensor.get("confusion"), dict) else None
+    if isinstance(rows, dict) and isinstance(merged.get("confusion", {}).get("matrix"), dict):
+        # a row of the confusion matrix is one distribution: the scenario's row replaces the preset's whole
+        # (merged key by key, a row {car = 0.8, truck = 0.2} would keep the preset's bus share and not sum to 1)
+        merged["confusion"]["matrix"].update(rows)
+    return {**raw, "sensor": merged}

@@ -279,6 +279,32 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"wrote     {path}")
     if not result.reused:
         _warn_ineffective(result.scenario, result.dataset)
+    if args.explain:
+        from .explain import add_to_run_report, explain
+
+        explained = explain(result.dataset.parent, label=result.label, workers=args.workers)
+        print(f"\n{explained.table}\n")
+        print(f"wrote     {explained.out} ({explained.coalitions} counterfactual runs, {explained.seconds:.0f} s)")
+        print(f"wrote     {add_to_run_report(result.dataset.parent, result.label, explained.document)}")
+    return 0
+
+
+def _names(text: str) -> list[str]:
+    """An argparse type for a comma-separated list of names."""
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected comma-separated names, got {text!r}")
+    return names
+
+
+def _cmd_explain(args: argparse.Namespace) -> int:
+    from .explain import explain
+
+    result = explain(args.run_dir, label=args.label, metrics=args.metric, causes=args.causes, samples=args.samples,
+                     engine=args.engine, workers=args.workers, address=args.address)
+    print(result.table)
+    print(f"\nwrote     {result.out}: explain.json, explain.md, verdicts.parquet, {len(result.plots)} waterfall "
+          f"plots ({result.coalitions} counterfactual runs, {result.seconds:.0f} s)")
     return 0
 
 
@@ -310,6 +336,12 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     print(f"bench     {result.out}: {result.points} points, {result.cells} cells ({result.cells_skipped} finished "
           f"earlier, {result.cells_run} run now), {result.rows} result rows")
     print(f"results   {result.results}")
+    if args.explain:
+        from .explain.bench import explain_bench
+
+        path = explain_bench(result.out, samples=args.explain_samples, engine=args.engine, workers=args.workers,
+                             address=args.address, progress=not args.quiet)
+        print(f"explain   {path}: what each cause costs every tracker on the base cells")
     print(f"report    simrig report {result.out}")
     return 0
 
@@ -460,6 +492,11 @@ def build_parser() -> argparse.ArgumentParser:
                        help="datasets by content key, shareable between suites (default: OUT/datasets)")
     bench.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
+    bench.add_argument("--explain", action="store_true",
+                       help="then explain every tracker on every base cell (simrig explain; the report's 'What each "
+                            "cause costs' section)")
+    bench.add_argument("--explain-samples", type=_int_at_least(2), default=None, metavar="N",
+                       help="permutations --explain samples (default: exact up to 7 cause groups, else 12)")
     _trust_argument(bench, "the suite file")
     bench.set_defaults(run=_cmd_bench)
 
@@ -502,7 +539,29 @@ def build_parser() -> argparse.ArgumentParser:
                      help="also render a PNG per camera and frame (slow); the tracker gets their paths in "
                           "SensorFrame.images")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--explain", action="store_true",
+                     help="also split the gap to a perfect sensor among the causes (simrig explain) and add it "
+                          "to report.md")
+    run.add_argument("--workers", type=_int_at_least(1), default=None,
+                     help="processes for --explain's counterfactual runs (default: this machine's)")
     run.set_defaults(run=_cmd_run)
+
+    explainer = commands.add_parser(
+        "explain", help="what each cause of detector error cost a run's tracker (counterfactual reruns, Shapley)")
+    explainer.add_argument("run_dir", type=Path, help="a 'simrig run' folder (dataset/, tracks/, scores/)")
+    explainer.add_argument("--label", default=None, help="which tracker run of RUN_DIR/tracks/ (when it holds several)")
+    explainer.add_argument("--metric", type=_names, default=None, metavar="A,B,...",
+                           help="overall metrics to explain (default AMOTA,HOTA,IDS,FN,FRAG for a 3D tracker; "
+                                "2d:NAME or 3d:NAME picks a dimension)")
+    explainer.add_argument("--causes", type=_names, default=None, metavar="A,B,...",
+                           help="cause groups to share among (default: every group present in the scenario)")
+    explainer.add_argument("--samples", type=_int_at_least(2), default=None, metavar="N",
+                           help="sample N permutations (default: exact when there are at most 7 groups, else 12)")
+    explainer.add_argument("--engine", choices=("local", "ray"), default="local", help="where the runs go")
+    explainer.add_argument("--workers", type=_int_at_least(1), default=None,
+                           help="processes (local; 1 runs in this process) or CPUs of a local Ray instance")
+    explainer.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
+    explainer.set_defaults(run=_cmd_explain)
     from .detector.cli import add_detector_command
 
     add_detector_command(commands)

@@ -24,7 +24,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "storage": ("simrig.dataset", "simrig.dataset.importing", "simrig.export"),
     "judging": ("simrig.scoring", "simrig.detector"),
     "pipeline": ("simrig.pipeline",),
-    "orchestration": ("simrig.benchmark", "simrig.search", "simrig.testing"),
+    "orchestration": ("simrig.benchmark", "simrig.search", "simrig.testing", "simrig.explain"),
     "faces": ("simrig.report", "simrig.figures", "simrig.cli", "simrig.api", "simrig.__main__", "simrig"),
 }
 BELOW_DATA = ("records", "scenarios", "geometry")

@@ -1,7 +1,5 @@
-"""Where cells run: a local process pool (the default) or Ray tasks (a local instance or a cluster joined at an
-address). Both yield (job, outcomes, dataset seconds) as cells finish; the caller records them, so the order
-of completion never reaches the results. The search runs an evaluation's seeds on the same two, through the
-:class:`concurrent.futures.Executor` interface (:class:`RayExecutor` for Ray).
+"""Where cells run: a local process pool (the default) or Ray tasks. Both yield (job, outcomes, dataset
+seconds) as cells finish; the caller records them, so the order of completion never reaches the results.
 
 No scheduler of our own: :class:`concurrent.futures.ProcessPoolExecutor` (``spawn`` processes: pyrender's
 EGL contexts are not safe to fork) or Ray's.
@@ -17,7 +15,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from contextlib import contextmanager
 from types import ModuleType
@@ -46,17 +44,39 @@ def machine_workers() -> int:
 def local_engine(jobs: list[Job], workers: int) -> Iterator[Finished]:
     """Run ``jobs`` in a pool of ``workers`` spawned processes. An error cancels what has not started and
     waits for the running cells; Ctrl-C stops the running workers at once and raises :class:`Interrupted`."""
+    results = local_map(evaluate, jobs, workers)
+    try:
+        for job, (outcomes, dataset_s) in results:
+            yield job, outcomes, dataset_s
+    finally:
+        results.close()
+
+
+def ray_engine(jobs: list[Job], workers: int | None, address: str | None) -> Iterator[Finished]:
+    """Run ``jobs`` as Ray tasks of one CPU each. With no ``address`` (and none in ``RAY_ADDRESS``) a local
+    Ray instance of ``workers`` CPUs is started and stopped again; with one, the cluster there is joined."""
+    results = ray_map(evaluate, jobs, workers, address)
+    try:
+        for job, (outcomes, dataset_s) in results:
+            yield job, outcomes, dataset_s
+    finally:
+        results.close()
+
+
+def local_map(function: Callable, items: list, workers: int) -> Iterator[tuple]:
+    """``(item, function(item))`` for every item, as they finish, from a pool of ``workers`` spawned
+    processes (``function`` must be importable by name). An error cancels what has not started and waits for
+    the running items; Ctrl-C stops the running workers at once and raises :class:`Interrupted`."""
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
                                initializer=die_with, initargs=(os.getpid(),))
     pending = {}
     try:
-        pending = {pool.submit(evaluate, job): job for job in jobs}
+        pending = {pool.submit(function, item): item for item in items}
         while pending:
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in done:
-                job = pending.pop(future)
-                outcomes, dataset_s = future.result()
-                yield job, outcomes, dataset_s
+                item = pending.pop(future)
+                yield item, future.result()
     except KeyboardInterrupt:
         # a future counts as running once queued to the pool (up to one extra per worker): at most one per worker
         running = min(sum(future.running() for future in pending), workers)
@@ -80,28 +100,6 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
         process.join(timeout=5)
         if process.is_alive():
             process.kill()
-
-
-def ray_engine(jobs: list[Job], workers: int | None, address: str | None) -> Iterator[Finished]:
-    """Run ``jobs`` as Ray tasks of one CPU each, on the Ray of :func:`ray_session`."""
-    with ray_session(workers, address) as ray:
-        pending = {}
-        try:
-            task = ray.remote(num_cpus=1, max_retries=0)(evaluate)
-            pending = {task.remote(job): job for job in jobs}
-            while pending:
-                done, _ = ray.wait(list(pending), num_returns=1)
-                job = pending.pop(done[0])
-                try:
-                    outcomes, dataset_s = ray.get(done[0])
-                except ray.exceptions.RayTaskError as error:
-                    raise error.as_instanceof_cause() from None
-                yield job, outcomes, dataset_s
-        except KeyboardInterrupt:
-            raise Interrupted(None, len(pending)) from None
-        finally:
-            for reference in pending:
-                ray.cancel(reference, force=True)
 
 
 @contextmanager
@@ -128,6 +126,30 @@ def ray_session(workers: int | None, address: str | None) -> Iterator[ModuleType
     finally:
         if started_here:
             ray.shutdown()
+
+
+def ray_map(function: Callable, items: list, workers: int | None, address: str | None) -> Iterator[tuple]:
+    """``(item, function(item))`` for every item, as they finish, as Ray tasks of one CPU each, on the Ray of
+    :func:`ray_session` (the cluster at ``address`` or ``RAY_ADDRESS``, else a local instance of ``workers``
+    CPUs started and stopped here)."""
+    with ray_session(workers, address) as ray:
+        pending = {}
+        try:
+            task = ray.remote(num_cpus=1, max_retries=0)(function)
+            pending = {task.remote(item): item for item in items}
+            while pending:
+                done, _ = ray.wait(list(pending), num_returns=1)
+                item = pending.pop(done[0])
+                try:
+                    result = ray.get(done[0])
+                except ray.exceptions.RayTaskError as error:
+                    raise error.as_instanceof_cause() from None
+                yield item, result
+        except KeyboardInterrupt:
+            raise Interrupted(None, len(pending)) from None
+        finally:
+            for reference in pending:
+                ray.cancel(reference, force=True)
 
 
 class RayExecutor(Executor):

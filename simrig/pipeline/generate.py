@@ -60,6 +60,7 @@ def generate(
     images: bool = False,
     progress: bool = False,
     world_from: Dataset | None = None,
+    removed: frozenset[str] = frozenset(),
 ) -> GenerateResult:
     """Generate the dataset of ``scenario`` with ``seed`` into ``out``; ``frames`` defaults to the scenario's.
 
@@ -72,6 +73,10 @@ def generate(
     rendering, world perturbations, seed and frames; only the detector's settings and sensor perturbations may
     differ). Its traffic and measured visibility are reused and only the sensor model runs — the files are
     byte-identical to a full generation, in a fraction of the time (no simulation, no rendering).
+
+    ``removed``: cause groups of the detector switched off (:mod:`simrig.sensor.groups`) — a counterfactual
+    dataset whose every other random draw is the one of the dataset with all causes on; its manifest records
+    them under ``removed_causes`` (absent when none are removed).
     """
     from simrig.pipeline.cache import world_key
 
@@ -88,7 +93,7 @@ def generate(
     check_output_folder(out, overwrite=overwrite)
     streams = RandomStreams(seed)
     rig = build_rig(scenario.rig)
-    sensor = SensorModel(scenario, rig, streams)
+    sensor = SensorModel(scenario, rig, streams, removed=removed)
     times = StageTimes()
     started = time.perf_counter()
     world = (_SimulatedWorld(scenario, rig, streams, images) if world_from is None
@@ -131,6 +136,7 @@ def generate(
                     "versions": package_versions(),
                     "events": events,
                     "world_key": world_key(scenario, seed, frames),
+                    **({"removed_causes": sorted(removed)} if removed else {}),
                 }
             )
             times.writing += time.perf_counter() - tick

@@ -5,6 +5,7 @@ Layout of ``out``::
     dataset/                 the generated dataset, shared by every tracker run into this folder
     tracks/LABEL/            the tracker's tracks (LABEL: the tracker's name, plus a key of its parameters and
                              scored camera when it has any)
+    tracks/LABEL/tracker.json     how to build that tracker again: name, parameters, scored camera
     scores/LABEL/score.json  every metric of that run: no wall-clock time, no absolute path, no timestamp
     scores/LABEL/errors.parquet   every FN/IDS/FRAG with its causes
     scores/LABEL/report.md   the score table and the command that reproduces it
@@ -40,6 +41,7 @@ from simrig.scenarios import Scenario, load_scenario
 from simrig.scoring import ScoreReport, score
 
 DATASET_DIR, TRACKS_DIR, SCORES_DIR, REPORT = "dataset", "tracks", "scores", "report.md"
+TRACKER_RECORD = "tracker.json"
 
 
 @dataclass(frozen=True)
@@ -130,25 +132,47 @@ def run_pipeline(
     dataset = Dataset.open(folder)
     label = run_label(tracker, params, camera)
     tracking = run_tracker(dataset, tracker, out / TRACKS_DIR / label, params, frame_time_limit_s=frame_time_limit_s)
+    _record_tracker(tracking.out, tracker, params, camera)
     report = score(dataset, tracking.tracks, camera=camera)  # scored in memory; the folder is for the user
     report = dataclasses.replace(report, dataset=DATASET_DIR, tracks=f"{TRACKS_DIR}/{label}")  # relative to out
     scores = out / SCORES_DIR / label
     scores.mkdir(parents=True, exist_ok=True)
     json_path, errors_path, markdown = scores / "score.json", scores / "errors.parquet", scores / REPORT
-    _write_text_atomic(json_path, json.dumps(report.to_dict(), indent=2) + "\n")
+    write_text_atomic(json_path, json.dumps(report.to_dict(), indent=2) + "\n")
     partial = errors_path.with_name(f".{errors_path.name}.partial-{os.getpid()}")
     report.write_errors(partial)
     os.replace(partial, errors_path)
     command = _command(scenario, seed, tracker, params, frames, camera, images)
-    _write_text_atomic(markdown, f"## {loaded.name}, seed {seed}, tracker {tracker}\n\n"
+    write_text_atomic(markdown, f"## {loaded.name}, seed {seed}, tracker {tracker}\n\n"
                                  f"Produced by `{command}`.\n\n```\n{report.table()}\n```\n")
     write_json_atomic(scores / "timings.json", {
         "generation_s": generation_s, "dataset_reused": reused, "frames": tracking.frames,
         "step_s": tracking.step_seconds, "step_frames_per_second": tracking.frames_per_second})
-    index = out / REPORT
-    _write_text_atomic(index, _index(out))
+    index = write_index(out)
     return PipelineResult(report, tracking, (folder, tracking.out, json_path, errors_path, markdown, index),
                           loaded, folder, reused, label)
+
+
+def _record_tracker(folder: Path, tracker, params: dict | None, camera: str | None) -> None:
+    """``folder/tracker.json``: what rebuilds the tracker (``simrig explain`` reruns it). A tracker object or
+    factory passed in Python, or parameters JSON cannot hold, cannot be named in a file: no record then (and
+    any older one is removed)."""
+    record = folder / TRACKER_RECORD
+    try:
+        text = json.dumps({"tracker": tracker, "params": params or {}, "camera": camera}, allow_nan=False)
+    except (TypeError, ValueError):
+        text = None
+    if not isinstance(tracker, str) or text is None:
+        record.unlink(missing_ok=True)
+        return
+    write_json_atomic(record, json.loads(text))
+
+
+def write_index(out: Path) -> Path:
+    """Rewrite ``out/report.md`` from the run sections in ``out/scores/*/report.md``."""
+    index = out / REPORT
+    write_text_atomic(index, _index(out))
+    return index
 
 
 def _index(out: Path) -> str:
@@ -159,7 +183,7 @@ def _index(out: Path) -> str:
             + "\n".join(sections))
 
 
-def _write_text_atomic(path: Path, text: str) -> None:
+def write_text_atomic(path: Path, text: str) -> None:
     partial = path.with_name(f".{path.name}.partial-{os.getpid()}")
     partial.write_text(text, encoding="utf-8")
     os.replace(partial, path)

@@ -8,6 +8,8 @@ from pathlib import Path
 
 from ..benchmark.api import BENCH_FILE
 from ..benchmark.results import CAMERAS, CAUSES, RESULTS
+from ..explain.bench import EXPLAIN_TABLE
+from .cause_costs import cause_costs_section
 from .curves import curve_table, plot_sweep, plot_sweep_by_scenario
 from .groups import groups
 from .load import BenchResults, load_bench
@@ -23,13 +25,14 @@ def write_report(results: Path | str, *, out: Path | str | None = None) -> Path:
     bench = load_bench(results)
     out = Path(out) if out is not None else Path("reports") / bench.suite
     out.mkdir(parents=True, exist_ok=True)
-    for name in (RESULTS, CAUSES, CAMERAS, BENCH_FILE):
+    for name in (RESULTS, CAUSES, CAMERAS, BENCH_FILE, EXPLAIN_TABLE):
         if (bench.folder / name).is_file() and (bench.folder / name).resolve() != (out / name).resolve():
             shutil.copyfile(bench.folder / name, out / name)
     lines = _header(bench, out)
     lines += _results_section(bench)
     lines += _curves_section(bench, out)
     lines += _causes_section(bench)
+    lines += cause_costs_section(bench.folder, bench.suite)
     lines += _worst_section(bench, out)
     index = out / "index.md"
     index.write_text("\n".join(lines) + "\n", encoding="utf-8")

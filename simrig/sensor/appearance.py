@@ -60,8 +60,10 @@ class Embeddings:
     """The embedding effect (see the module docstring); ``identity(actor_id)`` is an actor's noise-free
     identity vector."""
 
-    def __init__(self, streams: RandomStreams, config: EmbeddingConfig, class_mix: dict[str, float] | None = None):
+    def __init__(self, streams: RandomStreams, config: EmbeddingConfig, class_mix: dict[str, float] | None = None,
+                 *, enabled: bool = True):
         self._streams = streams
+        self.enabled = enabled  # false: noise drawn but not added (a counterfactual run)
         self.config = config
         self.class_names = list(class_mix or {"car": 1.0})
         weights = np.array([(class_mix or {"car": 1.0})[name] for name in self.class_names], dtype=float)
@@ -163,5 +165,6 @@ class Embeddings:
         if detected.any():
             sides = viewed_side(batch.boxes3d[detected], batch.world_from_camera[:3, 3])
             appearance = self.appearance(batch.actor_ids[detected], batch.classes[detected], sides)
-            embeddings[detected] = _unit(appearance + noise[detected] * sigma[detected, None])
+            embeddings[detected] = (_unit(appearance + noise[detected] * sigma[detected, None]) if self.enabled
+                                    else appearance)
         batch.embeddings = embeddings

@@ -38,13 +38,17 @@ class SensorEffect(Protocol):
 
 
 class _Random:
-    """Per-camera random streams of one effect (``stream_key`` is fixed per effect class; never renumber)."""
+    """Per-camera random streams of one effect (``stream_key`` is fixed per effect class; never renumber).
+
+    ``enabled`` false: the effect still draws every number it would draw (so no other draw moves) but its
+    imperfection is removed (a counterfactual run, :mod:`simrig.sensor.groups`)."""
 
     stream_key: int = -1
 
-    def __init__(self, streams: RandomStreams, config=None):
+    def __init__(self, streams: RandomStreams, config=None, *, enabled: bool = True):
         self._streams = streams
         self.config = config
+        self.enabled = enabled
         self._generators: dict[int, np.random.Generator] = {}
 
     def rng(self, camera_index: int) -> np.random.Generator:
@@ -66,18 +70,22 @@ def ramp(value: np.ndarray, zero_at: float, one_at: float) -> np.ndarray:
 
 class DetectionProbability:
     """p = p_max · ramp(visible fraction) · ramp(truncation) · ramp(distance); 0 out of view. Marks the
-    causes that lowered p: ``occluded``, ``truncated``, ``far``, ``out_of_view``."""
+    causes that lowered p: ``occluded``, ``truncated``, ``far``, ``out_of_view``. ``range_falloff`` false: no
+    distance ramp; ``random_misses`` false: p_max = 1 (counterfactual runs)."""
 
-    def __init__(self, config: DetectionConfig):
+    def __init__(self, config: DetectionConfig, *, range_falloff: bool = True, random_misses: bool = True):
         self.config = config
+        self.range_falloff = range_falloff
+        self.random_misses = random_misses
 
     def apply(self, batch: CameraBatch) -> None:
         c = self.config
         g_visible = ramp(batch.visible_fraction, c.min_visible_fraction, c.full_visible_fraction)
         g_truncation = ramp(np.nan_to_num(batch.truncation, nan=1.0), c.max_truncation, c.full_truncation)
-        g_distance = ramp(batch.distance, c.max_range_m, c.full_range_m)
+        g_distance = (ramp(batch.distance, c.max_range_m, c.full_range_m) if self.range_falloff
+                      else np.ones(len(batch)))
         in_view = batch.in_view
-        p = c.probability * g_visible * g_truncation * g_distance
+        p = (c.probability if self.random_misses else 1.0) * g_visible * g_truncation * g_distance
         batch.probability = batch.probability * np.where(in_view, p, 0.0)
         batch.causes |= np.where(~in_view, int(Cause.OUT_OF_VIEW), 0)
         batch.causes |= np.where(in_view & (g_visible < 1.0), int(Cause.OCCLUDED), 0)
@@ -101,8 +109,8 @@ class MissBursts(_Random):
 
     stream_key = 7
 
-    def __init__(self, streams: RandomStreams, config: DetectionConfig, period_s: float):
-        super().__init__(streams, config)
+    def __init__(self, streams: RandomStreams, config: DetectionConfig, period_s: float, *, enabled: bool = True):
+        super().__init__(streams, config, enabled=enabled)
         self.period_s = period_s
         self._chains: dict[int, TwoStateMarkov] = {}
 
@@ -113,6 +121,8 @@ class MissBursts(_Random):
         chain = self._chains.setdefault(batch.camera_index,
                                         TwoStateMarkov(c.burst_fraction, c.burst_mean_s, self.period_s))
         bad = chain.step(batch.actor_ids, self.rng(batch.camera_index).random(len(batch)))
+        if not self.enabled:
+            return
         hit = bad & batch.in_view
         batch.probability = np.where(hit, 0.0, batch.probability)
         batch.causes |= np.where(hit, int(Cause.BURST), 0)
@@ -128,7 +138,7 @@ class Box2DNoise(_Random):
         noise = self.rng(batch.camera_index).standard_normal((len(batch), 4))
         boxes = batch.boxes2d
         size = np.stack([boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1]], axis=1)[:, [0, 1, 0, 1]]
-        sigma = self.config.relative_sigma * size * batch.noise_factor[:, None]
+        sigma = (self.config.relative_sigma if self.enabled else 0.0) * size * batch.noise_factor[:, None]
         noisy = boxes + noise * sigma
         x = np.sort(noisy[:, [0, 2]], axis=1).clip(0.0, batch.camera.width)
         y = np.sort(noisy[:, [1, 3]], axis=1).clip(0.0, batch.camera.height)
@@ -155,8 +165,9 @@ class Monocular3D(_Random):
     stream_key = 2
     WIDTH = 9  # depth, lateral ×2, size ×3, yaw, velocity ×2
 
-    def __init__(self, streams: RandomStreams, config: Box3DNoiseConfig, period_s: float = 0.1):
-        super().__init__(streams, config)
+    def __init__(self, streams: RandomStreams, config: Box3DNoiseConfig, period_s: float = 0.1, *,
+                 enabled: bool = True):
+        super().__init__(streams, config, enabled=enabled)
         self.period_s = period_s
         phi, phi_size = (ar1_coefficient(period_s, t) for t in (config.correlation_time_s,
                                                                  config.size_correlation_time_s))
@@ -219,6 +230,8 @@ class Monocular3D(_Random):
         out[:, 3:6] = true[:, 3:6] * np.maximum(0.1, 1.0 + errors[:, 3:6] * (c.size_sigma * growth)[:, None])
         out[:, 6] = true[:, 6] + errors[:, 6] * np.radians(c.yaw_sigma_deg) * growth + np.where(flips, np.pi, 0.0)
         out[:, 7:9] = true[:, 7:9] + errors[:, 7:9] * (c.velocity_sigma_mps * growth)[:, None]
+        if not self.enabled:  # the errors were drawn (and their processes advanced) all the same
+            out = true.copy()
         if batch.yaw_offset:
             cos, sin = np.cos(batch.yaw_offset), np.sin(batch.yaw_offset)
             rotation = np.array([[cos, -sin], [sin, cos]])
@@ -259,8 +272,8 @@ class Confusion(_Random):
 
     stream_key = 8
 
-    def __init__(self, streams: RandomStreams, config: ConfusionConfig):
-        super().__init__(streams, config)
+    def __init__(self, streams: RandomStreams, config: ConfusionConfig, *, enabled: bool = True):
+        super().__init__(streams, config, enabled=enabled)
         self.rows = {true: (np.array(list(row), dtype=object), np.cumsum(list(row.values())))
                      for true, row in config.matrix.items()}
 
@@ -268,6 +281,8 @@ class Confusion(_Random):
         if not self.rows:
             return
         u = self.rng(batch.camera_index).random(len(batch))
+        if not self.enabled:
+            return
         labels = np.array(batch.classes, dtype=object)
         for true, (names, cumulative) in self.rows.items():
             mine = batch.classes == true
@@ -287,8 +302,8 @@ class Clutter(_Random):
     stream_key = 5
 
     def __init__(self, config: ClutterConfig, class_mix: dict[str, float], embedding_dimension: int,
-                 streams: RandomStreams):
-        super().__init__(streams, config)
+                 streams: RandomStreams, *, enabled: bool = True):
+        super().__init__(streams, config, enabled=enabled)
         self.classes = np.array(list(class_mix), dtype=object)
         weights = np.array(list(class_mix.values()), dtype=float)
         self.weights = weights / weights.sum()
@@ -314,7 +329,7 @@ class Clutter(_Random):
         scores = rng.uniform(*c.score_range, count)
         ranges = rng.uniform(*c.depth_range_m, count)
         embeddings = _unit_rows(rng.standard_normal((count, self.dimension))).astype(np.float32)
-        if batch.silenced:
+        if batch.silenced or not self.enabled:
             batch.add_false_positives(*self._none, Cause.CLUTTER)
             return
         boxes = np.stack([
@@ -337,8 +352,8 @@ class Duplicates(_Random):
 
     stream_key = 9
 
-    def __init__(self, streams: RandomStreams, config: DuplicateConfig):
-        super().__init__(streams, config)
+    def __init__(self, streams: RandomStreams, config: DuplicateConfig, *, enabled: bool = True):
+        super().__init__(streams, config, enabled=enabled)
 
     def apply(self, batch: CameraBatch) -> None:
         c = self.config
@@ -348,7 +363,7 @@ class Duplicates(_Random):
         n = len(batch)
         u, edges, offsets = rng.random(n), rng.standard_normal((n, 4)), rng.standard_normal((n, 2))
         hit = batch.detected & (u < c.probability)
-        if not hit.any():
+        if not hit.any() or not self.enabled:
             return
         boxes = batch.det_boxes2d[hit]
         size = np.stack([boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1]], axis=1)[:, [0, 1, 0, 1]]

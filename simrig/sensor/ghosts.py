@@ -35,8 +35,9 @@ class GhostWorld:
     offset [m]; :meth:`advance` once per frame, :meth:`apply` per camera batch."""
 
     def __init__(self, config: GhostConfig, class_mix: dict[str, float], rig: Rig, period_s: float,
-                 embedding_dimension: int, streams: RandomStreams):
+                 embedding_dimension: int, streams: RandomStreams, *, reported: bool = True):
         self.config = config
+        self.reported = reported  # false: the ghosts live and are drawn, but no camera reports them
         self.rig = rig
         self.period_s = period_s
         self.dimension = embedding_dimension
@@ -141,7 +142,7 @@ class GhostWorld:
         g = len(self.ids)
         u, scores = rng.random(g), rng.beta(*self._beta(), g) if g else np.empty(0)
         batch.ghost_ids = np.empty(0, dtype=np.int64)
-        if g == 0 or batch.silenced:
+        if g == 0 or batch.silenced or not self.reported:
             return
         in_view = self.projection.in_view[batch.camera_index]
         seen = np.nonzero(in_view & (u < self.config.probability))[0]

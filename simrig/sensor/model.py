@@ -30,6 +30,7 @@ from .effects import (
     SensorEffect,
 )
 from .ghosts import GhostWorld
+from .groups import DETECTOR_GROUPS, check_groups
 from .perturbations import PERTURBATION_EFFECTS, DroppedFrames, Scheduled, ScheduledOcclusion
 
 
@@ -45,10 +46,18 @@ class SensorOutput:
 
 class SensorModel:
     """The detector of every camera of ``rig`` as configured by ``scenario`` (its ``sensor`` tables and its
-    sensor ``perturbations``), drawing from ``streams``."""
+    sensor ``perturbations``), drawing from ``streams``.
 
-    def __init__(self, scenario: Scenario, rig: Rig, streams: RandomStreams):
+    ``removed``: cause groups switched off (:mod:`.groups`) for a counterfactual run; every effect still
+    draws what it draws with them on, so the remaining causes' draws are bit-identical. Empty: the detector
+    as configured (the dataset's bytes do not depend on this option)."""
+
+    def __init__(self, scenario: Scenario, rig: Rig, streams: RandomStreams, *,
+                 removed: frozenset[str] = frozenset()):
         self.rig = rig
+        removed = check_groups(removed, scenario)
+        self.removed = removed
+        on = {name: name not in removed for name in DETECTOR_GROUPS}
         sensor = scenario.sensor
         rate = scenario.frame_rate_hz
         period = 1.0 / rate
@@ -56,7 +65,7 @@ class SensorModel:
         occlusions, others = [], []
         self.drops: list[DroppedFrames] = []
         for index, config in enumerate(scenario.perturbations):
-            if config.kind in WORLD_KINDS:
+            if config.kind in WORLD_KINDS or f"{config.kind}#{index}" in removed:
                 continue
             if isinstance(config, DropFrames):
                 effect = DroppedFrames(config, index, rig, rate, streams)
@@ -66,22 +75,30 @@ class SensorModel:
             (occlusions if isinstance(effect, ScheduledOcclusion) else others).append(effect)
             self.scheduled.append(effect)
         class_mix = scenario.traffic.class_mix
-        self.embeddings = Embeddings(streams, sensor.embedding, class_mix)
-        self.ghosts = GhostWorld(sensor.ghosts, class_mix, rig, period, sensor.embedding.dimension, streams)
+        self.embeddings = Embeddings(streams, sensor.embedding, class_mix, enabled=on["reid"])
+        self.ghosts = GhostWorld(sensor.ghosts, class_mix, rig, period, sensor.embedding.dimension, streams,
+                                 reported=on["false_positives"])
+        seen_as: list[SensorEffect] = [] if on["occlusion"] and on["truncation"] else [
+            SeenUnhindered(occlusion=not on["occlusion"], truncation=not on["truncation"])]
         self.effects: list[SensorEffect] = [
+            *seen_as,
             *occlusions,  # before the probability: they set the visible fraction
-            DetectionProbability(sensor.detection),
+            DetectionProbability(sensor.detection, range_falloff=on["far_range"], random_misses=on["random_misses"]),
             *others,
-            MissBursts(streams, sensor.detection, period),
+            MissBursts(streams, sensor.detection, period, enabled=on["random_misses"]),
             DetectionDraw(streams),
-            Box2DNoise(streams, sensor.box2d),
-            Monocular3D(streams, sensor.box3d, period),
+            Box2DNoise(streams, sensor.box2d, enabled=on["localisation"]),
+            Monocular3D(streams, sensor.box3d, period, enabled=on["localisation"]),
             Scores(streams, sensor.score),
-            Confusion(streams, sensor.confusion),
+            Confusion(streams, sensor.confusion, enabled=on["confusion"]),
             self.embeddings,
-            Clutter(sensor.clutter, class_mix, sensor.embedding.dimension, streams),
+            Clutter(sensor.clutter, class_mix, sensor.embedding.dimension, streams, enabled=on["false_positives"]),
             self.ghosts,
-            Duplicates(streams, sensor.duplicates),
+        ]
+        # per camera in this order; then, across cameras, the cross-camera filter when removed; then finishing
+        self.cross_camera = not on["cross_camera"]
+        self.finishing: list[SensorEffect] = [
+            Duplicates(streams, sensor.duplicates, enabled=on["duplicates"]),
             DetectionOrder(streams),
         ]
 
@@ -118,6 +135,50 @@ class SensorModel:
             for effect in self.effects:
                 effect.apply(batch)
             batches.append(batch)
+        if self.cross_camera:
+            keep_best_camera(batches)
+        for batch in batches:  # each effect draws from its own per-camera stream: the loop order changes nothing
+            for effect in self.finishing:
+                effect.apply(batch)
         dropped = any(drop.dropped(state.frame) for drop in self.drops)
         events = tuple(effect.describe(context) for effect in self.scheduled if effect.active(state.frame))
         return SensorOutput(tuple(batches), dropped, events)
+
+
+class SeenUnhindered:
+    """Counterfactual: every actor in view is seen as fully visible (``occlusion``) and/or untruncated
+    (``truncation``) — the rendered hindrance removed before any other effect reads it."""
+
+    def __init__(self, *, occlusion: bool, truncation: bool):
+        self.occlusion, self.truncation = occlusion, truncation
+
+    def apply(self, batch: CameraBatch) -> None:
+        if self.occlusion:
+            batch.visible_fraction = np.where(batch.in_view, 1.0, batch.visible_fraction)
+        if self.truncation:
+            batch.truncation = np.where(batch.in_view, 0.0, batch.truncation)
+
+
+def keep_best_camera(batches: list[CameraBatch]) -> None:
+    """Counterfactual ``cross_camera``: an actor detected by several cameras stays detected only in the best
+    one — largest visible fraction × (1 − truncation), then largest true pixel box, then rig order."""
+    if not batches or not len(batches[0]):
+        return
+    detected = np.stack([batch.detected for batch in batches])  # (C, N)
+    quality = np.stack([batch.visible_fraction * (1.0 - np.nan_to_num(batch.truncation, nan=1.0))
+                        for batch in batches])
+    area = np.stack([np.nan_to_num((batch.boxes2d[:, 2] - batch.boxes2d[:, 0])
+                                   * (batch.boxes2d[:, 3] - batch.boxes2d[:, 1])) for batch in batches])
+    cameras = np.arange(len(batches))[:, None] * np.ones_like(quality)
+    # lexicographic best per actor among the detecting cameras: quality, area (both descending), camera index
+    order = np.lexsort((cameras, -area, -quality, ~detected), axis=0)
+    best = order[0]
+    for index, batch in enumerate(batches):
+        drop = batch.detected & (best != index)
+        if drop.any():
+            batch.detected = batch.detected & ~drop
+            batch.det_boxes2d = np.where(drop[:, None], np.nan, batch.det_boxes2d)
+            batch.det_boxes3d = np.where(drop[:, None], np.nan, batch.det_boxes3d)
+            batch.scores = np.where(drop, np.nan, batch.scores)
+            if batch.embeddings is not None:
+                batch.embeddings = np.where(drop[:, None], np.float32(np.nan), batch.embeddings)

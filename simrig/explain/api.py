@@ -1,0 +1,377 @@
+"""``simrig explain``: what each cause of detector error cost a tracker, by re-simulating without it.
+
+For a ``simrig run`` folder, the run's sensor is rerun with sets of cause groups removed
+(:mod:`simrig.sensor.groups`; traffic and visibility reused, every other random draw identical), the run's
+tracker is rebuilt from its record (``tracks/LABEL/tracker.json``) and rerun on each counterfactual, and the gap
+between the perfect sensor's score and the actual score is split among the groups by Shapley value
+(:mod:`.shapley`) — exactly over all 2^k coalitions when k is small, by permutation sampling with a 95 %
+confidence interval otherwise. Each FN / IDS / FRAG of the actual run also gets a verdict: the groups whose
+removal alone makes it disappear (matched by dimension, kind, actor, frame and camera).
+
+Writes ``RUN_DIR/explain/LABEL/``: ``explain.json``, ``explain.md`` (the table and its command),
+``verdicts.parquet`` and a waterfall plot per metric; counterfactual datasets are cached in
+``RUN_DIR/explain/cache/``.
+"""
+
+from __future__ import annotations
+
+import json
+import shlex
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.parquet as pq
+
+from simrig.dataset import Dataset
+from simrig.dataset.manifest import write_json_atomic
+from simrig.errors import SimrigError
+from simrig.pipeline.run import DATASET_DIR, REPORT, SCORES_DIR, TRACKER_RECORD, TRACKS_DIR, write_text_atomic
+from simrig.pipeline.track import TrackingError, build_tracker
+from simrig.scenarios.schema import scenario_from_record
+from simrig.scoring.results import METRICS_2D, METRICS_3D
+from simrig.sensor.groups import all_groups, present_groups
+
+from ..benchmark.engines import local_map, machine_workers, ray_map
+from .coalition import ERROR_KINDS, CoalitionResult, CoalitionTask, evaluate_coalition
+from .shapley import Coalition, all_coalitions, exact_shares, prefixes, sample_orders, sampled_shares
+from .waterfall import waterfall
+
+EXPLAIN_DIR, CACHE_DIR = "explain", "cache"
+EXACT_LIMIT = 7
+"""Up to this many groups the Shapley values are exact (2^7 = 128 coalitions); above, sampled."""
+DEFAULT_SAMPLES = 12
+"""Permutations sampled when the groups are too many for the exact values and ``samples`` is not given."""
+DEFAULT_METRICS_3D = ("AMOTA", "HOTA", "IDS", "FN", "FRAG")
+DEFAULT_METRICS_2D = ("HOTA", "IDSW", "CLR_FN", "Frag")
+
+
+class ExplainError(SimrigError):
+    """``simrig explain`` cannot run: the message names the folder, record, cause or metric."""
+
+
+@dataclass(frozen=True)
+class ExplainResult:
+    """What :func:`explain` wrote (``out``), its JSON document, the readable table, the plots, how many
+    coalitions were evaluated and the wall time [s]."""
+
+    out: Path
+    document: dict
+    table: str
+    plots: tuple[Path, ...]
+    coalitions: int
+    seconds: float
+
+
+def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str] | None = None,
+            causes: list[str] | None = None, samples: int | None = None, engine: str = "local",
+            workers: int | None = None, address: str | None = None) -> ExplainResult:
+    """Explain the tracker run ``label`` of the ``simrig run`` folder ``run_dir`` (see the module docstring).
+
+    ``metrics``: overall metric names (3D first when the tracker has 3D tracks; ``2d:NAME``/``3d:NAME`` to
+    choose); ``causes``: the groups to share among (default: every group present in the scenario — an absent
+    one is a null cause, share exactly 0); ``samples``: permutations to sample (default: exact when there are
+    at most :data:`EXACT_LIMIT` groups, else :data:`DEFAULT_SAMPLES`); ``engine`` ``local`` (a process pool of
+    ``workers``; 1 runs in this process) or ``ray``."""
+    started = time.perf_counter()
+    run_dir = Path(run_dir)
+    dataset = _dataset(run_dir)
+    label = _label(run_dir, label)
+    record = _tracker_record(run_dir, label)
+    if not (run_dir / SCORES_DIR / label / "errors.parquet").is_file():
+        raise ExplainError(f"{run_dir / SCORES_DIR / label}: no errors.parquet (the run was not scored; run "
+                           "'simrig run' again into this folder)")
+    scenario = scenario_from_record(dataset.scenario)
+    known = all_groups(scenario)
+    has_3d = (run_dir / TRACKS_DIR / label / "tracks3d.parquet").exists() and record["camera"] is None
+    present = present_groups(scenario, len(dataset.rig.cameras), scored_in_3d=has_3d)
+    players = _players(causes, known, present, scenario.name)
+    chosen = choose_metrics(metrics, has_3d)
+    game = play(dataset, record, players, chosen, samples, run_dir / EXPLAIN_DIR / CACHE_DIR, engine=engine,
+                workers=workers, address=address, verdicts=True)
+    verdicts = _verdicts(run_dir, label, players, game.results)
+    document = _document(scenario.name, dataset, label, record, chosen, known, present, game, verdicts, run_dir)
+    out = run_dir / EXPLAIN_DIR / label
+    out.mkdir(parents=True, exist_ok=True)
+    write_json_atomic(out / "explain.json", document)
+    table = explain_table(document)
+    write_text_atomic(out / "explain.md", explain_markdown(document, table))
+    partial = out / ".verdicts.parquet.partial"
+    pq.write_table(verdicts["table"], partial)
+    partial.replace(out / "verdicts.parquet")
+    plots = tuple(waterfall(document, name, out / f"waterfall-{_file_name(name)}.png") for name in chosen)
+    return ExplainResult(out, document, table, plots, len(game.results), time.perf_counter() - started)
+
+
+@dataclass(frozen=True)
+class Game:
+    """The coalitions run (``results`` by removed groups) and the groups' shares ``{group: (M,)}`` of the
+    chosen metrics, with the 95 % half-widths when sampled (``half`` None when exact)."""
+
+    players: tuple[str, ...]
+    exact: bool
+    orders: list[tuple[str, ...]] | None
+    results: dict[Coalition, CoalitionResult]
+    shares: dict[str, np.ndarray]
+    half: dict[str, np.ndarray] | None
+
+    @property
+    def actual(self) -> np.ndarray:
+        return self.results[frozenset()].values
+
+    @property
+    def perfect(self) -> np.ndarray:
+        return self.results[frozenset(self.players)].values
+
+    def metrics(self, chosen: dict[str, tuple[str, str]]) -> dict[str, dict]:
+        """``{metric: {dimension, actual, perfect, shares, residual[, ci95]}}`` (JSON-ready, NaN as None)."""
+        out = {}
+        for i, name in enumerate(chosen):
+            share = {p: float(self.shares[p][i]) for p in self.players}
+            gap = float(self.perfect[i] - self.actual[i])
+            entry = {"dimension": chosen[name][0], "actual": _number(self.actual[i]),
+                     "perfect": _number(self.perfect[i]), "shares": {p: _number(v) for p, v in share.items()},
+                     "residual": _number(gap - sum(share.values()))}
+            if self.half is not None:
+                entry["ci95"] = {p: _number(self.half[p][i]) for p in self.players}
+            out[name] = entry
+        return out
+
+
+def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[str, tuple[str, str]],
+         samples: int | None, scratch: Path, *, engine: str = "local", workers: int | None = None,
+         address: str | None = None, verdicts: bool = False) -> Game:
+    """Run the coalitions the Shapley values of ``players`` need on ``dataset`` with the tracker of ``record``
+    (counterfactual datasets cached in ``scratch``) and compute them: exact when ``samples`` is None and there
+    are at most :data:`EXACT_LIMIT` players, else from ``samples`` (default :data:`DEFAULT_SAMPLES`) sampled
+    permutations. ``verdicts``: also run each single removal and keep the error keys of those and the actual."""
+    if samples is not None and samples < 2:
+        raise ExplainError(f"--samples: at least 2 permutations are needed for an interval, got {samples}")
+    exact = samples is None and len(players) <= EXACT_LIMIT
+    orders = None if exact else sample_orders(players, samples or DEFAULT_SAMPLES, dataset.seed)
+    singles = {frozenset({p}) for p in players} if verdicts else set()
+    needed = set(all_coalitions(players)) if exact else prefixes(orders) | singles
+    needed |= {frozenset(), frozenset(players)}
+    keep_errors = singles | {frozenset()} if verdicts else set()
+    tasks = [CoalitionTask(str(dataset.path), record["tracker"], tuple(sorted(record["params"].items())),
+                           record["camera"], tuple(sorted(c)), tuple(chosen.values()), c in keep_errors, str(scratch))
+             for c in sorted(needed, key=lambda c: (len(c), sorted(c)))]
+    results = {frozenset(result.removed): result for result in _run(tasks, engine, workers, address)}
+    values = {c: r.values for c, r in results.items()}
+    if exact:
+        shares, half = exact_shares(players, values) if players else {}, None
+    else:
+        sampled = sampled_shares(players, orders, values)
+        shares, half = sampled.shares, sampled.half_width
+    return Game(players, exact, orders, results, shares, half)
+
+
+def _players(causes: list[str] | None, known: tuple[str, ...], present: tuple[str, ...],
+             scenario: str) -> tuple[str, ...]:
+    if not causes:
+        return present
+    unknown = [name for name in causes if name not in known]
+    if unknown:
+        raise ExplainError(f"--causes: unknown cause group {unknown[0]!r}; {scenario!r} has: {', '.join(known)}")
+    return tuple(dict.fromkeys(causes))
+
+
+def _dataset(run_dir: Path) -> Dataset:
+    if not run_dir.is_dir():
+        raise ExplainError(f"run folder {str(run_dir)!r} does not exist")
+    try:
+        return Dataset.open(run_dir / DATASET_DIR)
+    except SimrigError as error:
+        raise ExplainError(f"{run_dir}: not a 'simrig run' folder with a complete dataset ({error})") from None
+
+
+def _label(run_dir: Path, label: str | None) -> str:
+    tracks = run_dir / TRACKS_DIR
+    labels = sorted(p.name for p in tracks.iterdir() if p.is_dir()) if tracks.is_dir() else []
+    if not labels:
+        raise ExplainError(f"{tracks}: no tracker run in this folder (run 'simrig run ... --out {run_dir}' first)")
+    if label is None:
+        if len(labels) > 1:
+            raise ExplainError(f"{tracks}: holds {len(labels)} tracker runs ({', '.join(labels)}); choose one "
+                               "with --label")
+        return labels[0]
+    if label not in labels:
+        raise ExplainError(f"--label {label!r}: {tracks} holds {', '.join(labels)}")
+    return label
+
+
+def _tracker_record(run_dir: Path, label: str) -> dict:
+    """The tracker's record, checked by building the tracker once; a one-line error when it cannot be."""
+    path = run_dir / TRACKS_DIR / label / TRACKER_RECORD
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+        tracker, params, camera = record["tracker"], record["params"], record["camera"]
+        if not isinstance(tracker, str) or not isinstance(params, dict):
+            raise TypeError("tracker must be a name, params a table")
+    except FileNotFoundError:
+        raise ExplainError(f"{path}: missing, so the tracker of this run cannot be recreated (a tracker passed "
+                           "as an object in Python, or a run made before simrig recorded its tracker); rerun "
+                           "'simrig run' with a registered tracker or module:attribute") from None
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise ExplainError(f"{path}: not a tracker record ({error})") from None
+    try:
+        build_tracker(tracker, params)
+    except TrackingError as error:
+        raise ExplainError(f"{path}: the tracker cannot be recreated: {error}") from None
+    return {"tracker": tracker, "params": params, "camera": camera}
+
+
+def choose_metrics(names: list[str] | None, has_3d: bool) -> dict[str, tuple[str, str]]:
+    """Display name → (dimension, metric name)."""
+    names = list(names or (DEFAULT_METRICS_3D if has_3d else DEFAULT_METRICS_2D))
+    chosen = {}
+    for name in names:
+        dimension, _, bare = name.rpartition(":")
+        if dimension == "3d" and has_3d and bare in METRICS_3D or dimension == "2d" and bare in METRICS_2D:
+            chosen[name] = (dimension, bare)
+        elif not dimension and has_3d and bare in METRICS_3D:
+            chosen[name] = ("3d", bare)
+        elif not dimension and bare in METRICS_2D:
+            chosen[name] = ("2d", bare)
+        else:
+            available = [*(METRICS_3D if has_3d else ()), *METRICS_2D]
+            raise ExplainError(f"--metric: unknown metric {name!r} for this run; choose from "
+                               f"{', '.join(available)} (2d:NAME or 3d:NAME to pick a dimension)")
+    return chosen
+
+
+def _run(tasks: list[CoalitionTask], engine: str, workers: int | None, address: str | None
+         ) -> list[CoalitionResult]:
+    if engine not in ("local", "ray"):
+        raise ExplainError(f"--engine {engine!r}: choose local or ray")
+    if engine == "ray":
+        return [result for _, result in ray_map(evaluate_coalition, tasks, workers, address)]
+    workers = min(workers or machine_workers(), len(tasks))
+    if workers <= 1:
+        return [evaluate_coalition(task) for task in tasks]
+    return [result for _, result in local_map(evaluate_coalition, tasks, workers)]
+
+
+def _verdicts(run_dir: Path, label: str, players: tuple[str, ...],
+              results: dict[Coalition, CoalitionResult]) -> dict:
+    """The run's FN/IDS/FRAG rows (with their context causes) and, per row, the groups whose removal alone
+    makes it disappear; counts per kind and group."""
+    actual = pq.read_table(run_dir / SCORES_DIR / label / "errors.parquet")
+    actual = actual.filter(pc.is_in(actual.column("kind"), value_set=pa.array(ERROR_KINDS)))
+    rows = actual.select(["dimension", "kind", "actor_id", "frame", "camera"]).to_pydict()
+    keys = list(zip(rows["dimension"], rows["kind"], rows["actor_id"], rows["frame"], rows["camera"], strict=True))
+    fixed = [[p for p in players if key not in results[frozenset({p})].errors] for key in keys]
+    table = actual.append_column("fixed_by", pa.array(fixed, type=pa.list_(pa.string())))
+    counts: dict[str, dict[str, dict[str, int]]] = {}
+    for (dimension, kind, *_), groups in zip(keys, fixed, strict=True):
+        entry = counts.setdefault(dimension, {}).setdefault(kind, {"total": 0, "no single cause": 0,
+                                                                   **{p: 0 for p in players}})
+        entry["total"] += 1
+        for group in groups:
+            entry[group] += 1
+        if not groups:
+            entry["no single cause"] += 1
+    return {"table": table, "counts": counts}
+
+
+def _document(scenario: str, dataset: Dataset, label: str, record: dict, chosen: dict, known: tuple[str, ...],
+              present: tuple[str, ...], game: Game, verdicts: dict, run_dir: Path) -> dict:
+    players, exact, orders = game.players, game.exact, game.orders
+    words = ["simrig", "explain", "RUN_DIR", "--label", label, "--metric", ",".join(chosen)]
+    words += ["--causes", ",".join(players)] if players else []
+    words += [] if exact else ["--samples", str(len(orders))]
+    return {
+        "scenario": scenario, "seed": dataset.seed, "frames": dataset.frame_count, "label": label,
+        "tracker": record["tracker"], "params": record["params"], "camera": record["camera"],
+        "mode": "exact" if exact else "sampled", "samples": None if exact else len(orders),
+        "coalitions": len(game.results), "causes": list(players),
+        "null_causes": [name for name in known if name not in present and name not in players],
+        "kept_on": [name for name in present if name not in players],
+        "metrics": game.metrics(chosen), "verdicts": verdicts["counts"],
+        "command": shlex.join(words).replace("RUN_DIR", shlex.quote(str(run_dir))),
+    }
+
+
+def _number(value) -> float | None:
+    value = float(value)
+    return None if np.isnan(value) else value
+
+
+def _file_name(metric: str) -> str:
+    return metric.replace(":", "-")
+
+
+def _format(value: float | None, count: bool, signed: bool = False) -> str:
+    if value is None:
+        return "-"
+    text = f"{value:+.1f}" if count and signed else f"{value:.1f}" if count else (
+        f"{value:+.3f}" if signed else f"{value:.3f}")
+    return text
+
+
+def explain_table(document: dict) -> str:
+    """The readable table: actual, perfect and each group's share per metric (± the 95 % half-width when
+    sampled), the residual, and the per-error verdict counts."""
+    from simrig.scoring.results import COUNT_METRICS
+
+    metrics = document["metrics"]
+    names = list(metrics)
+    counts = {name: name.rpartition(":")[2] in COUNT_METRICS for name in names}
+    sampled = document["mode"] == "sampled"
+    head = (f"exact Shapley values over {document['coalitions']} coalitions" if not sampled else
+            f"Shapley values sampled from {document['samples']} permutations ({document['coalitions']} coalitions; "
+            "± half-width of the 95% confidence interval)")
+    who = document["tracker"] + (f" ({document['label']})" if document["label"] != document["tracker"] else "")
+    lines = [f"explain   {who} on {document['scenario']}, seed "
+             f"{document['seed']}, {document['frames']} frames: {head}",
+             "share    how much removing the cause group moves the metric toward the perfect sensor "
+             "(shares add up to perfect − actual)", ""]
+    width = max([len(p) for p in document["causes"]] + [16]) + 2
+    cell = 18 if sampled else 10
+    lines.append(" " * width + "".join(name.rjust(cell) for name in names))
+    for row in ("actual", "perfect"):
+        lines.append(row.ljust(width) + "".join(_format(metrics[n][row], counts[n]).rjust(cell) for n in names))
+    for cause in document["causes"]:
+        cells = []
+        for n in names:
+            text = _format(metrics[n]["shares"][cause], counts[n], signed=True)
+            if sampled:
+                text += " ±" + _format(metrics[n]["ci95"][cause], counts[n])
+            cells.append(text.rjust(cell))
+        lines.append(cause.ljust(width) + "".join(cells))
+    lines.append("residual".ljust(width) + "".join(
+        (f"{metrics[n]['residual']:.1e}" if metrics[n]["residual"] is not None else "-").rjust(cell) for n in names))
+    if document["null_causes"]:
+        lines.append("not an imperfection here (share 0 exactly): " + ", ".join(document["null_causes"]))
+    if document["kept_on"]:
+        lines.append("not in --causes (on in every run): " + ", ".join(document["kept_on"]))
+    for dimension, kinds in document["verdicts"].items():
+        lines += ["", f"{dimension.upper()} errors of the actual run that removing one cause group alone fixes"]
+        lines.append(f"{'':<{width}}" + "".join(kind.rjust(8) for kind in kinds))
+        for row in ("total", *document["causes"], "no single cause"):
+            lines.append(row.ljust(width) + "".join(str(kinds[k][row]).rjust(8) for k in kinds))
+    return "\n".join(lines)
+
+
+def explain_markdown(document: dict, table: str | None = None) -> str:
+    """``explain.md``: the table in a code block under the command that produced it."""
+    table = explain_table(document) if table is None else table
+    return (f"### What each cause cost {document['label']}\n\nProduced by `{document['command']}`.\n\n"
+            f"```\n{table}\n```\n")
+
+
+def add_to_run_report(run_dir: Path | str, label: str, document: dict) -> Path:
+    """Append the explanation to ``scores/LABEL/report.md`` (replacing an earlier one) and rewrite the run
+    folder's ``report.md``."""
+    from simrig.pipeline.run import write_index
+
+    run_dir = Path(run_dir)
+    path = run_dir / SCORES_DIR / label / REPORT
+    text = path.read_text(encoding="utf-8")
+    marker = "### What each cause cost"
+    text = text.split(f"\n{marker}")[0].rstrip("\n") + "\n\n" + explain_markdown(document)
+    write_text_atomic(path, text)
+    return write_index(run_dir)

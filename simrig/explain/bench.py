@@ -1,0 +1,74 @@
+"""What each cause costs every tracker of a bench: the Shapley shares (:mod:`.api`) on each base cell (every
+scenario at its own settings, every seed) of a finished bench folder, one row per (cell, tracker, metric,
+cause) in ``OUT/explain.parquet`` — what ``simrig report`` turns into its "What each cause costs" section."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+from tqdm import tqdm
+
+from simrig.dataset import Dataset
+from simrig.scenarios.schema import scenario_from_record
+from simrig.sensor.groups import present_groups
+
+from ..benchmark.api import BENCH_FILE
+from ..benchmark.results import RESULTS
+from ..benchmark.suite import TrackerEntry
+from .api import ExplainError, choose_metrics, play
+
+EXPLAIN_TABLE = "explain.parquet"
+EXPLAIN_CACHE = "explain-cache"
+SCHEMA = pa.schema([
+    pa.field("scenario", pa.string()), pa.field("seed", pa.int64()), pa.field("cell", pa.string()),
+    pa.field("tracker", pa.string()), pa.field("metric", pa.string()), pa.field("cause", pa.string()),
+    pa.field("share", pa.float64()), pa.field("ci95", pa.float64()), pa.field("actual", pa.float64()),
+    pa.field("perfect", pa.float64()), pa.field("mode", pa.string()),
+])
+"""One row per (base cell, tracker, metric, cause): the cause's share of (perfect − actual); ``ci95`` the
+half-width of its 95 % interval (null when exact)."""
+
+
+def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[str] | None = None,
+                  engine: str = "local", workers: int | None = None, address: str | None = None,
+                  progress: bool = False) -> Path:
+    """Explain every tracker on every base cell of the finished bench folder ``out``; writes and returns
+    ``out/explain.parquet``. Counterfactual datasets are cached in ``out/explain-cache/CELL``."""
+    out = Path(out)
+    try:
+        description = json.loads((out / BENCH_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError) as error:
+        raise ExplainError(f"{out}: not a finished bench folder ({error})") from None
+    if not description.get("complete") or not (out / RESULTS).is_file():
+        raise ExplainError(f"{out}: the bench did not finish; run '{description.get('command')}' again first")
+    entries = {TrackerEntry.model_validate(entry).name: entry for entry in description["suite_settings"]["trackers"]}
+    base = pq.read_table(out / RESULTS, columns=["scenario", "seed", "sweep", "cell", "tracker", "scored"])
+    pairs = sorted({(r["scenario"], r["seed"], r["cell"], r["tracker"], r["scored"])
+                    for r in base.to_pylist() if r["sweep"] == ""})
+    rows = []
+    for scenario_name, seed, cell, tracker, scored in tqdm(pairs, desc="explain", unit="run", disable=not progress):
+        entry = entries[tracker]
+        record = {"tracker": entry["tracker"], "params": entry.get("params") or {}, "camera": entry.get("camera")}
+        dataset = Dataset.open(Path(description["cache"]) / cell)
+        scenario = scenario_from_record(dataset.scenario)
+        players = present_groups(scenario, len(dataset.rig.cameras), scored_in_3d=scored == "3d")
+        chosen = choose_metrics(metrics, scored == "3d")
+        game = play(dataset, record, players, chosen, samples, out / EXPLAIN_CACHE / cell, engine=engine,
+                    workers=workers, address=address)
+        mode = "exact" if game.exact else "sampled"
+        for metric, values in game.metrics(chosen).items():
+            for cause, share in values["shares"].items():
+                rows.append({"scenario": scenario_name, "seed": seed, "cell": cell, "tracker": tracker,
+                             "metric": metric, "cause": cause, "share": share,
+                             "ci95": values.get("ci95", {}).get(cause), "actual": values["actual"],
+                             "perfect": values["perfect"], "mode": mode})
+    table = pa.Table.from_pylist(rows, schema=SCHEMA)
+    path = out / EXPLAIN_TABLE
+    partial = out / f".{EXPLAIN_TABLE}.partial-{os.getpid()}"
+    pq.write_table(table, partial)
+    os.replace(partial, path)
+    return path

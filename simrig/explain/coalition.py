@@ -1,0 +1,107 @@
+"""One coalition of the explainer's game: the run's sensor rerun with some cause groups removed, the run's
+tracker on its detections, the scores — in one call that a worker process (local pool or Ray) can run.
+
+The counterfactual dataset is made from the run's own world (``generate(..., world_from=...)``: traffic and
+visibility reused, never simulated or rendered again) into a scratch cache under the run folder, keyed by
+the removed groups, so a second ``simrig explain`` of the same run reuses it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+
+from simrig.dataset import Dataset
+from simrig.errors import DatasetError
+from simrig.pipeline.generate import generate
+from simrig.pipeline.track import run_tracker
+from simrig.scenarios.schema import scenario_from_record
+from simrig.scoring import score
+
+ERROR_KINDS = ("FN", "IDS", "FRAG")
+"""The errors a verdict is given for."""
+ErrorKey = tuple[str, str, int, int, str]
+"""(dimension, kind, ground-truth actor id, frame, camera — empty in 3D): how an error is matched across runs."""
+
+
+@dataclass(frozen=True)
+class CoalitionTask:
+    """What a worker needs: the run's dataset folder, the tracker record, the removed groups, the metrics
+    (``(dimension, name)`` pairs), whether to return the error keys, and the scratch folder."""
+
+    dataset: str
+    tracker: str
+    params: tuple[tuple[str, object], ...]
+    camera: str | None
+    removed: tuple[str, ...]
+    metrics: tuple[tuple[str, str], ...]
+    errors: bool
+    scratch: str
+
+
+@dataclass(frozen=True)
+class CoalitionResult:
+    """The metric values ``(M,)`` (NaN where undefined) and, when asked, the error keys of the run."""
+
+    removed: tuple[str, ...]
+    values: np.ndarray
+    errors: frozenset[ErrorKey] | None
+
+
+def coalition_key(removed: tuple[str, ...]) -> str:
+    """A short folder name for a set of removed groups (``actual`` for none).
+
+    >>> coalition_key(()), len(coalition_key(("occlusion", "reid")))
+    ('actual', 16)
+    """
+    if not removed:
+        return "actual"
+    return hashlib.sha256(json.dumps(sorted(removed)).encode()).hexdigest()[:16]
+
+
+def counterfactual_dataset(source: Dataset, removed: tuple[str, ...], scratch: Path) -> Dataset:
+    """The dataset of ``source``'s scenario and seed with ``removed`` groups off (``source`` itself for none),
+    from the scratch cache or made there now."""
+    if not removed:
+        return source
+    out = scratch / coalition_key(removed)
+    try:
+        return Dataset.open(out)
+    except DatasetError:
+        pass
+    scenario = scenario_from_record(source.scenario)
+    generate(scenario, seed=source.seed, out=out, frames=source.frame_count, overwrite=out.exists(),
+             world_from=source, removed=frozenset(removed))
+    return Dataset.open(out)
+
+
+def metric_value(report, dimension: str, name: str) -> float:
+    """One overall metric of a score report (NaN when the report has no such dimension or value)."""
+    table = report.metrics3d if dimension == "3d" else report.metrics2d
+    value = None if table is None else table["overall"].get(name)
+    return float("nan") if value is None else float(value)
+
+
+def error_keys(errors) -> frozenset[ErrorKey]:
+    """The FN/IDS/FRAG rows of an errors table as matching keys."""
+    rows = errors.filter(pc.is_in(errors.column("kind"), value_set=pa.array(ERROR_KINDS))).select(
+        ["dimension", "kind", "actor_id", "frame", "camera"]).to_pydict()
+    return frozenset(zip(rows["dimension"], rows["kind"], rows["actor_id"], rows["frame"], rows["camera"],
+                         strict=True))
+
+
+def evaluate_coalition(task: CoalitionTask) -> CoalitionResult:
+    """Run one coalition (importable by name: the pool and Ray workers call it)."""
+    source = Dataset.open(task.dataset)
+    dataset = counterfactual_dataset(source, task.removed, Path(task.scratch))
+    tracking = run_tracker(dataset, task.tracker, None, dict(task.params))
+    report = score(dataset, tracking.tracks, camera=task.camera)
+    values = np.array([metric_value(report, dimension, name) for dimension, name in task.metrics])
+    return CoalitionResult(task.removed, values, error_keys(report.errors) if task.errors else None)
+
