@@ -47,11 +47,21 @@ def get_setting(scenario: Scenario, path: str) -> Any:
 
 
 def with_setting(scenario: Scenario, path: str, value: Any) -> Scenario:
-    """``scenario`` with the key at ``path`` set to ``value``, validated again; its name is kept."""
+    """``scenario`` with the key at ``path`` set to ``value``, validated again; its name is kept. ``sensor.preset``
+    replaces the whole sensor table with that preset's (set single ``sensor.*`` keys after it)."""
     get_setting(scenario, path)  # the path must exist (with defaults) before it is set
     raw = scenario.model_dump(mode="json", exclude_unset=True)
     raw["name"] = scenario.name
     steps = _steps(path)
+    if steps == ["sensor", "preset"]:
+        # another detector: the whole sensor table becomes that preset's (keys set after this one override it);
+        # merged into the resolved table, the old preset's values would stay on top of the new one's
+        raw["sensor"] = {"preset": copy.deepcopy(value)}
+        try:
+            return Scenario.model_validate(raw)
+        except ValidationError as error:
+            raise ScenarioError(f"scenario {scenario.name!r} with {path} = {value!r}: {describe_errors(error)}") \
+                from None
     node: Any = raw
     for step in steps[:-1]:
         if isinstance(step, int):

@@ -89,6 +89,15 @@ def test_settings_by_path_and_alias():
         get_setting(scenario, "perturbations.5.frames")
 
 
+def test_setting_the_preset_replaces_the_detector():
+    scenario = load_scenario("highway_surround6")
+    assert scenario.sensor.preset == "bevformer_small" and scenario.sensor.ghosts.birth_rate_hz > 0
+    ideal = with_setting(scenario, "sensor.preset", "ideal_noise")
+    assert ideal.sensor == load_scenario("highway_surround6").sensor.model_validate({"preset": "ideal_noise"})
+    assert ideal.sensor.ghosts.birth_rate_hz == 0.0  # not the old preset's ghosts under the new name
+    assert with_setting(ideal, "sensor.detection.probability", 0.5).sensor.detection.probability == 0.5
+
+
 def test_smoke_plan_counted_by_hand():
     suite, scenarios = load_suite("smoke")
     plan = make_plan(suite, scenarios)

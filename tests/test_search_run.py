@@ -119,6 +119,7 @@ seeds = 1
 confirm_top = 0
 
 [base_settings]
+"sensor.preset" = "ideal_noise"   # the planted weakness alone: no ghosts or duplicates to keep actors in
 "render.visibility" = false
 "traffic.vehicles" = 3
 "traffic.spawn_min_distance_m" = 20.0
