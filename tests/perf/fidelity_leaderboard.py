@@ -4,7 +4,8 @@ Run explicitly (not part of the test suite)::
 
     python tests/perf/fidelity_leaderboard.py [--seeds 0] [--frames 200] [--data runs/fidelity]
 
-For each surround catalog scene and each detector (``monodis`` and the old model ``ideal_noise``) it
+For each surround catalog scene and each detector (``monodis``, the catalog's ``bevformer_small`` and the old
+model ``ideal_noise``) it
 generates the dataset once (reused from ``--data`` when complete), runs the 3D reference trackers with
 their default parameters and scores them (3D, every class). Beside them: the SAGA-Track paper's Table 3
 (nuScenes val, MonoDIS-class detections, Mahalanobis cost: KM AMOTA 0.143, IDS 1,998 → FOTA 0.242, 522).
@@ -25,7 +26,7 @@ from simrig.scoring import score
 
 SCENES = ("highway_surround6", "handover_surround6", "roundabout_surround6")
 TRACKERS = ("global_hungarian", "saga", "percam_merge", "simpletrack")
-DETECTORS = ("monodis", "ideal_noise")
+DETECTORS = ("monodis", "bevformer_small", "ideal_noise")  # SAGA-Track's detector class, the catalog's, the old model
 PAPER = {"global_hungarian": (0.143, 1998), "saga": (0.242, 522)}  # SAGA-Track paper, Table 3 (KM, FOTA)
 REID = (("highway_surround6", "CAM_FRONT", "deepsort"), ("highway_stereo", "left", "collabmot"))
 
