@@ -454,7 +454,7 @@ class Dataset:
             f"actors    {len(unique_ids)} distinct "
             f"({', '.join(f'{k} {v}' for k, v in class_counts.items()) or 'none'}); "
             f"{per_frame.min()}–{per_frame.max()} per frame, mean {per_frame.mean():.1f}",
-            f"rig       {self.rig.name}: {', '.join(self.rig.camera_names)}",
+            f"rig       {self.rig.name}: {', '.join(self.rig.camera_names) or 'no cameras (3D only)'}",
             f"rows      ground_truth {truth_rows}, projections {projection_rows} "
             f"({in_view_pairs} in view)",
             f"sensor    {self.num_rows('detections')} detections ({clutter} false positives), "

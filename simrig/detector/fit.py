@@ -55,9 +55,12 @@ def fit_dataset(path: Path | str) -> Fit:
     box3d, depth_normal = fit_box3d(errors, pairs, period, notes)
     same = _same_time_pairs(links)
     shared = lag1(depth_normal, *same) if len(same[0]) >= 30 else float("nan")
-    if not np.isfinite(shared):
-        notes.append("shared_fraction: not identifiable (fewer than 30 actor sightings by two cameras at once)")
-    notes.append(f"shared_fraction: correlation of normalised depth errors over {len(same[0])} two-camera sightings")
+    if np.isfinite(shared):
+        notes.append(f"shared_fraction: correlation of normalised depth errors over {len(same[0])} two-camera "
+                     "sightings")
+    else:
+        notes.append(f"shared_fraction: not identifiable ({len(same[0])} actor sightings by two cameras at once, "
+                     "fewer than 30); written as 0")
     box3d["shared_fraction"] = float(np.clip(shared, 0.0, 1.0)) if np.isfinite(shared) else 0.0
 
     detection, burst_note = _fit_misses(dataset, period)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import importlib
 import inspect
 import typing
+from pathlib import Path
 
 import simrig.trackers as tracker_registry
 
@@ -61,6 +62,12 @@ def is_tracker_factory(target: object) -> bool:
     return _has_tracker_methods(returned)
 
 
+def _in_working_folder(module_name: str) -> bool:
+    """Whether the top-level module of ``module_name`` is a file or package in the current folder."""
+    top = Path(module_name.partition(".")[0])
+    return Path(f"{top}.py").is_file() or (top / "__init__.py").is_file()
+
+
 def import_tracker_factory(spec: str):
     """``"package.module:Attribute.path"`` → the tracker factory it names; a :class:`TrackerReferenceError`
     naming the spec when it cannot be imported or is not a tracker factory (nothing of it is called)."""
@@ -72,7 +79,11 @@ def import_tracker_factory(spec: str):
         for part in attribute.split("."):
             target = getattr(target, part)
     except (ImportError, AttributeError, ValueError) as error:
-        raise TrackerReferenceError(f"tracker {spec!r}: cannot import it ({error})") from None
+        hint = ""
+        if isinstance(error, ModuleNotFoundError) and _in_working_folder(module_name):
+            hint = ("; it is in the current folder, which the simrig command does not search: run with "
+                    "PYTHONPATH=. or pip install your package")
+        raise TrackerReferenceError(f"tracker {spec!r}: cannot import it ({error}){hint}") from None
     if not is_tracker_factory(target):
         kind = type(target).__name__
         raise TrackerReferenceError(
