@@ -274,6 +274,8 @@ def _verdicts(run_dir: Path, label: str, players: tuple[str, ...],
             entry[group] += 1
         if not groups:
             entry["no single cause"] += 1
+    counts = {dimension: {kind: kinds[kind] for kind in ERROR_KINDS if kind in kinds}  # FN, IDS, FRAG in order
+              for dimension, kinds in counts.items()}
     return {"table": table, "counts": counts}
 
 
