@@ -276,7 +276,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     print(f"\ntracked   {result.tracking.frames} frames with {args.tracker} "
           f"({result.tracking.frames_per_second:.0f} frames/s in step())")
     for path in result.written:
-        print(f"wrote     {path}")
+        if not (result.reused and Path(path) == Path(result.dataset)):  # said above: reused, not written
+            print(f"wrote     {path}")
     if not result.reused:
         _warn_ineffective(result.scenario, result.dataset)
     if args.explain:
