@@ -302,7 +302,7 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     from .explain import explain
 
     result = explain(args.run_dir, label=args.label, metrics=args.metric, causes=args.causes, samples=args.samples,
-                     engine=args.engine, workers=args.workers, address=args.address)
+                     engine=args.engine, workers=args.workers, address=args.address, progress=True)
     print(result.table)
     print(f"\nwrote     {result.out}: explain.json, explain.md, verdicts.parquet, {len(result.plots)} waterfall "
           f"plots ({result.coalitions} counterfactual runs, {result.seconds:.0f} s)")

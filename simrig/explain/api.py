@@ -68,7 +68,7 @@ class ExplainResult:
 
 def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str] | None = None,
             causes: list[str] | None = None, samples: int | None = None, engine: str = "local",
-            workers: int | None = None, address: str | None = None) -> ExplainResult:
+            workers: int | None = None, address: str | None = None, progress: bool = False) -> ExplainResult:
     """Explain the tracker run ``label`` of the ``simrig run`` folder ``run_dir`` (see the module docstring).
 
     ``metrics``: overall metric names (3D first when the tracker has 3D tracks; ``2d:NAME``/``3d:NAME`` to
@@ -91,7 +91,7 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     players = _players(causes, known, present, scenario.name)
     chosen = choose_metrics(metrics, has_3d)
     game = play(dataset, record, players, chosen, samples, run_dir / EXPLAIN_DIR / CACHE_DIR, engine=engine,
-                workers=workers, address=address, verdicts=True)
+                workers=workers, address=address, verdicts=True, progress=progress)
     verdicts = _verdicts(run_dir, label, players, game.results)
     document = _document(scenario.name, dataset, label, record, chosen, known, present, game, verdicts, run_dir)
     out = run_dir / EXPLAIN_DIR / label
@@ -143,7 +143,7 @@ class Game:
 
 def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[str, tuple[str, str]],
          samples: int | None, scratch: Path, *, engine: str = "local", workers: int | None = None,
-         address: str | None = None, verdicts: bool = False) -> Game:
+         address: str | None = None, verdicts: bool = False, progress: bool = False) -> Game:
     """Run the coalitions the Shapley values of ``players`` need on ``dataset`` with the tracker of ``record``
     (counterfactual datasets cached in ``scratch``) and compute them: exact when ``samples`` is None and there
     are at most :data:`EXACT_LIMIT` players, else from ``samples`` (default :data:`DEFAULT_SAMPLES`) sampled
@@ -159,7 +159,7 @@ def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[
     tasks = [CoalitionTask(str(dataset.path), record["tracker"], tuple(sorted(record["params"].items())),
                            record["camera"], tuple(sorted(c)), tuple(chosen.values()), c in keep_errors, str(scratch))
              for c in sorted(needed, key=lambda c: (len(c), sorted(c)))]
-    results = {frozenset(result.removed): result for result in _run(tasks, engine, workers, address)}
+    results = {frozenset(result.removed): result for result in _run(tasks, engine, workers, address, progress)}
     values = {c: r.values for c, r in results.items()}
     if exact:
         shares, half = exact_shares(players, values) if players else {}, None
@@ -243,16 +243,20 @@ def choose_metrics(names: list[str] | None, has_3d: bool) -> dict[str, tuple[str
     return chosen
 
 
-def _run(tasks: list[CoalitionTask], engine: str, workers: int | None, address: str | None
-         ) -> list[CoalitionResult]:
+def _run(tasks: list[CoalitionTask], engine: str, workers: int | None, address: str | None,
+         progress: bool = False) -> list[CoalitionResult]:
+    """Every coalition's counterfactual run, on the chosen engine; ``progress``: a bar on stderr."""
+    from tqdm import tqdm
+
     if engine not in ("local", "ray"):
         raise ExplainError(f"--engine {engine!r}: choose local or ray")
     if engine == "ray":
-        return [result for _, result in ray_map(evaluate_coalition, tasks, workers, address)]
-    workers = min(workers or machine_workers(), len(tasks))
-    if workers <= 1:
-        return [evaluate_coalition(task) for task in tasks]
-    return [result for _, result in local_map(evaluate_coalition, tasks, workers)]
+        finished = (result for _, result in ray_map(evaluate_coalition, tasks, workers, address))
+    else:
+        workers = min(workers or machine_workers(), len(tasks))
+        finished = ((evaluate_coalition(task) for task in tasks) if workers <= 1
+                    else (result for _, result in local_map(evaluate_coalition, tasks, workers)))
+    return list(tqdm(finished, total=len(tasks), desc="explain", unit="run", disable=not progress))
 
 
 def _verdicts(run_dir: Path, label: str, players: tuple[str, ...],
