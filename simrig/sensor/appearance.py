@@ -28,6 +28,8 @@ _SIDES = 3  # back, side, front
 _CALIBRATION_STREAM = 10
 _LOOKALIKE_STREAM = 11
 _NOISE_STREAM = 4  # the embedding noise's stream key since the first sensor model: never renumber
+_SOLVED_SIGMA: dict[tuple, float] = {}
+"""σ solved for a target AUC, by (seed, embedding settings, classes, class weights, target): see ``_solved_sigma``."""
 _CALIBRATION_PAIRS = 4000
 
 
@@ -72,7 +74,7 @@ class Embeddings:
         self._lookalike: dict[tuple[str, int], np.ndarray] = {}
         self._appearance: dict[tuple[int, int], np.ndarray] = {}  # (actor id, side) → appearance
         self._generators: dict[int, np.random.Generator] = {}
-        self.sigma = config.sigma if config.target_auc is None else self.solve_sigma(config.target_auc)
+        self.sigma = config.sigma if config.target_auc is None else self._solved_sigma(config.target_auc)
 
     # ------------------------------------------------------------------ fixed vectors
     def _actor(self, actor_id: int) -> tuple[np.ndarray, int, np.ndarray]:
@@ -116,6 +118,15 @@ class Embeddings:
         return out
 
     # ------------------------------------------------------------------ calibration
+    def _solved_sigma(self, target_auc: float) -> float:
+        """:meth:`solve_sigma`, remembered per process for the same seed, settings and classes (a pure function of
+        them: a counterfactual explanation builds the sensor model again for every coalition of one run)."""
+        key = (self._streams.seed, self.config.model_dump_json(), tuple(self.class_names),
+               self.class_weights.tobytes(), float(target_auc))
+        if key not in _SOLVED_SIGMA:
+            _SOLVED_SIGMA[key] = self.solve_sigma(target_auc)
+        return _SOLVED_SIGMA[key]
+
     def solve_sigma(self, target_auc: float) -> float:
         """σ whose reference-condition same/different-identity ROC AUC is ``target_auc`` (bisection)."""
         c = self.config
