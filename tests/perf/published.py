@@ -51,10 +51,10 @@ def cached_dataset(scenario: str, seed: int, frames: int, data: Path, *, preset:
 
 def load_scenario_dump(dump: dict):
     """The scenario a dataset's manifest recorded, or None when today's schema no longer reads it."""
-    from simrig.scenarios import Scenario
+    from simrig.scenarios.schema import scenario_from_record
 
     try:
-        return Scenario.model_validate(dump)
+        return scenario_from_record(dump)
     except ValueError:
         return None
 
