@@ -6,7 +6,7 @@ import itertools
 import numpy as np
 import pytest
 from simrig.trackers.assignment import greedy, hungarian
-from simrig.trackers.costs import bev_distance, mahalanobis, overlaps
+from simrig.trackers.costs import bev_distance, iou, mahalanobis, overlaps
 
 
 def _box(x, y, z=1.0, length=2.0, width=2.0, height=2.0, yaw=0.0):
@@ -25,6 +25,24 @@ def test_giou_of_unit_cubes_matches_the_arithmetic():
     iou_bev, giou_bev = overlaps(a, b, bev=True)
     np.testing.assert_allclose(iou_bev[0], [1 / 3, 0.0, 1.0])
     np.testing.assert_allclose(giou_bev[0], [1 / 3, 8 / 12 - 1, 1.0])
+
+
+def test_iou_alone_matches_the_arithmetic_and_overlaps():
+    a = np.stack([_box(0, 0)])
+    b = np.stack([_box(1, 0), _box(4, 0), _box(0, 0, z=2.0)])
+    np.testing.assert_allclose(iou(a, b)[0], [1 / 3, 0.0, 1 / 3])
+    np.testing.assert_allclose(iou(a, b, bev=True)[0], [1 / 3, 0.0, 1.0])
+    # Boxes scattered so that some overlap, some touch circumcircles only, most are apart: the IoU-only path
+    # (which skips pairs whose circumcircles are apart) gives overlaps()'s IoU bit for bit.
+    rng = np.random.default_rng(3)
+    many = np.stack([_box(*rng.uniform(-6, 6, 2), z=rng.uniform(0.5, 1.5), length=rng.uniform(1, 5),
+                          width=rng.uniform(1, 2.5), height=rng.uniform(1, 3), yaw=rng.uniform(-3, 3))
+                     for _ in range(40)])
+    for bev in (False, True):
+        expected, _ = overlaps(many, many[:25], bev=bev)
+        assert (expected > 0).sum() > 40 and (expected == 0).sum() > 200
+        np.testing.assert_array_equal(iou(many, many[:25], bev=bev), expected)
+    assert iou(many[:0], many).shape == (0, 40)
 
 
 def test_giou_is_unchanged_when_the_whole_scene_turns():

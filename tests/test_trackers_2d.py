@@ -149,3 +149,18 @@ def test_bytetrack_finds_a_lost_track_again_within_its_buffer():
     ids = ids_in(run("bytetrack", frames))
     assert ids[3] == [1] and ids[5] == [] and ids[8] == [1]
     assert ids_in(run("bytetrack", frames, track_buffer=2))[9] == [2]  # lost for too long: a new track
+
+
+@pytest.mark.parametrize("name", ["deepsort", "bytetrack"])
+def test_a_box_shrinking_to_nothing_never_gives_an_empty_box(name):
+    # A box at the image border shrinking fast (a car leaving the view): the filter's height velocity would
+    # carry the predicted height below zero on the first missed frame. A counterfactual bench run once
+    # stopped there, the tracker output refused as an empty box; like SORT's area, the height and aspect
+    # stop shrinking at zero instead.
+    heights = [60.0, 40.0, 20.0, 8.0, 2.0]
+    frames = [frame(k, {"left": [detection(100.0, 150.0, w=h * 1.5, h=h, identity=0)]}) for k, h in enumerate(heights)]
+    frames += [frame(len(heights) + k, {"left": []}) for k in range(3)]
+    for tracks in run(name, frames):
+        for track in tracks:
+            x1, y1, x2, y2 = track.boxes2d["left"].as_array()
+            assert x2 > x1 and y2 > y1, (track, tracks)

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .costs import bev_corners, bev_distance, enlarged, mahalanobis, overlaps
+from .costs import bev_corners, bev_distance, enlarged, iou, mahalanobis, overlaps
 
 
 @dataclass(frozen=True)
@@ -46,8 +46,7 @@ class IouCost:
     enlarge: float = 1.2
 
     def __call__(self, predicted: np.ndarray, innovation: np.ndarray, detections: np.ndarray) -> np.ndarray:
-        iou, _ = overlaps(enlarged(predicted, self.enlarge), detections, floor=None if self.gate >= 1 else 0.0)
-        return 1.0 - iou
+        return 1.0 - iou(enlarged(predicted, self.enlarge), detections)
 
 
 @dataclass(frozen=True)

@@ -49,6 +49,51 @@ def mahalanobis(predicted: np.ndarray, innovation: np.ndarray, measured: np.ndar
     return np.sqrt(np.maximum(np.einsum("nmi,nij,nmj->nm", diff, inverse, diff), 0.0))
 
 
+def _footprint_bounds(tracks: np.ndarray, detections: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centre distance d and sum of circumradii (N, M) [m]: footprints with d ≥ the sum cannot overlap."""
+    radius = 0.5 * np.hypot(tracks[:, 3], tracks[:, 4])[:, None] + 0.5 * np.hypot(detections[:, 3], detections[:, 4])
+    return bev_distance(tracks, detections), radius
+
+
+def _pair_overlap(tracks: np.ndarray, detections: np.ndarray, rows: np.ndarray, cols: np.ndarray, bev: bool,
+                  hull: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Intersection, union and (with ``hull``) enclosing size of the pairs ``(rows[k], cols[k])``: areas [m²]
+    with ``bev``, volumes [m³] otherwise (intersection = footprint intersection × height overlap; enclosing =
+    convex hull of both footprints × the union of the height ranges)."""
+    corners_a, corners_b = bev_corners(tracks), bev_corners(detections)
+    poly_a, poly_b = shapely.polygons(corners_a), shapely.polygons(corners_b)
+    intersection = shapely.area(shapely.intersection(poly_a[rows], poly_b[cols]))
+    enclosing = None
+    if hull:
+        both = np.concatenate([corners_a[rows], corners_b[cols]], axis=1)
+        enclosing = shapely.area(shapely.convex_hull(shapely.multipoints(both)))
+    area_a, area_b = tracks[rows, 3] * tracks[rows, 4], detections[cols, 3] * detections[cols, 4]
+    if bev:
+        return intersection, area_a + area_b - intersection, enclosing
+    top_a, bottom_a = tracks[rows, 2] + tracks[rows, 5] / 2, tracks[rows, 2] - tracks[rows, 5] / 2
+    top_b, bottom_b = detections[cols, 2] + detections[cols, 5] / 2, detections[cols, 2] - detections[cols, 5] / 2
+    inter = intersection * np.maximum(0.0, np.minimum(top_a, top_b) - np.maximum(bottom_a, bottom_b))
+    union = area_a * tracks[rows, 5] + area_b * detections[cols, 5] - inter
+    if hull:
+        enclosing = enclosing * (np.maximum(top_a, top_b) - np.minimum(bottom_a, bottom_b))
+    return inter, union, enclosing
+
+
+def iou(tracks: np.ndarray, detections: np.ndarray, *, bev: bool = False) -> np.ndarray:
+    """IoU of rotated boxes (N, M): 3D by default, footprints only with ``bev`` — the IoU of :func:`overlaps`,
+    without its enclosing hulls, and computed only for pairs whose circumcircles overlap (the others are 0
+    exactly)."""
+    out = np.zeros((len(tracks), len(detections)))
+    if out.size == 0:
+        return out
+    d, radius = _footprint_bounds(tracks, detections)
+    rows, cols = np.nonzero(d < radius)
+    if len(rows):
+        inter, union, _ = _pair_overlap(tracks, detections, rows, cols, bev, hull=False)
+        out[rows, cols] = inter / union
+    return out
+
+
 def overlaps(
     tracks: np.ndarray, detections: np.ndarray, *, bev: bool = False, floor: float | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -59,15 +104,14 @@ def overlaps(
     Footprint geometry is shapely's. With ``floor``, pairs whose GIoU is provably below ``floor`` are not
     computed: their GIoU is reported as −inf (and their IoU, 0, is exact). The proof: disjoint footprints
     (centre distance d > sum of circumradii) have GIoU ≤ (A₁ + A₂)/hull − 1 and the hull holds a triangle of
-    area ρ·d, ρ the larger inscribed radius.
+    area ρ·d, ρ the larger inscribed radius. Callers that need the IoU alone use :func:`iou`.
     """
     n, m = len(tracks), len(detections)
-    iou = np.zeros((n, m))
+    iou_out = np.zeros((n, m))
     giou = np.full((n, m), -np.inf)
     if n == 0 or m == 0:
-        return iou, giou
-    d = bev_distance(tracks, detections)
-    radius = 0.5 * np.hypot(tracks[:, 3], tracks[:, 4])[:, None] + 0.5 * np.hypot(detections[:, 3], detections[:, 4])
+        return iou_out, giou
+    d, radius = _footprint_bounds(tracks, detections)
     areas = (tracks[:, 3] * tracks[:, 4])[:, None] + (detections[:, 3] * detections[:, 4])[None, :]
     inscribed = 0.5 * np.maximum(np.minimum(tracks[:, 3], tracks[:, 4])[:, None],
                                  np.minimum(detections[:, 3], detections[:, 4])[None, :])
@@ -78,24 +122,11 @@ def overlaps(
         candidate = ~surely_below
     rows, cols = np.nonzero(candidate)
     if len(rows) == 0:
-        return iou, giou
-    corners_a, corners_b = bev_corners(tracks), bev_corners(detections)
-    poly_a, poly_b = shapely.polygons(corners_a), shapely.polygons(corners_b)
-    intersection = shapely.area(shapely.intersection(poly_a[rows], poly_b[cols]))
-    both = np.concatenate([corners_a[rows], corners_b[cols]], axis=1)
-    hull = shapely.area(shapely.convex_hull(shapely.multipoints(both)))
-    area_a, area_b = tracks[rows, 3] * tracks[rows, 4], detections[cols, 3] * detections[cols, 4]
-    if bev:
-        inter, union, enclosing = intersection, area_a + area_b - intersection, hull
-    else:
-        top_a, bottom_a = tracks[rows, 2] + tracks[rows, 5] / 2, tracks[rows, 2] - tracks[rows, 5] / 2
-        top_b, bottom_b = detections[cols, 2] + detections[cols, 5] / 2, detections[cols, 2] - detections[cols, 5] / 2
-        inter = intersection * np.maximum(0.0, np.minimum(top_a, top_b) - np.maximum(bottom_a, bottom_b))
-        union = area_a * tracks[rows, 5] + area_b * detections[cols, 5] - inter
-        enclosing = hull * (np.maximum(top_a, top_b) - np.minimum(bottom_a, bottom_b))
-    iou[rows, cols] = inter / union
+        return iou_out, giou
+    inter, union, enclosing = _pair_overlap(tracks, detections, rows, cols, bev, hull=True)
+    iou_out[rows, cols] = inter / union
     giou[rows, cols] = inter / union - (enclosing - union) / enclosing
-    return iou, giou
+    return iou_out, giou
 
 
 def enlarged(boxes: np.ndarray, factor: float) -> np.ndarray:

@@ -79,6 +79,9 @@ class DeepSortTrack:
         self.hits, self.time_since_update, self.confirmed, self.detection = 1, 0, confirmed, detection
 
     def predict(self) -> None:
+        for size, rate in ((2, 6), (3, 7)):  # aspect and height must not go negative (SORT's rule for its area)
+            if self.kf.x[size, 0] + self.kf.x[rate, 0] <= 0:
+                self.kf.x[rate, 0] = 0.0
         h = float(self.kf.x[3, 0])
         p, v = POSITION_WEIGHT, VELOCITY_WEIGHT
         self.kf.predict(Q=_noise(h, (p, p, 1e-2, p), (v, v, 1e-5, v)))

@@ -25,7 +25,7 @@ from simrig.types import ActorClass, Box3D, Rig, SensorFrame, Track
 from . import motion
 from .assignment import UNMATCHED
 from .clock import FrameClock
-from .costs import overlaps
+from .costs import iou
 from .detections import LABELS, DetectionArrays, detection_arrays
 from .life import HitsAndAge, TrackLife
 
@@ -176,9 +176,9 @@ class KalmanTracker:
         if len(self.tracks) < 2:
             return
         boxes = np.stack([track.kf.x[:7, 0] for track in self.tracks])
-        iou, _ = overlaps(boxes, boxes, bev=True, floor=0.0)
         labels = np.array([track.label for track in self.tracks])
-        rows, cols = np.nonzero(np.triu(iou >= self.duplicate_iou, k=1) & (labels[:, None] == labels[None, :]))
+        same_class = labels[:, None] == labels[None, :]
+        rows, cols = np.nonzero(np.triu(iou(boxes, boxes, bev=True) >= self.duplicate_iou, k=1) & same_class)
         if len(rows) == 0:
             return
         rank = sorted(range(len(self.tracks)), key=lambda i: (-self.tracks[i].life.hits, self.tracks[i].track_id))

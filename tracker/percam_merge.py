@@ -18,7 +18,7 @@ from simrig.types import ActorClass, Box3D, Rig, SensorFrame, Track
 
 from .assignment import hungarian
 from .clock import FrameClock
-from .costs import overlaps
+from .costs import iou
 from .detections import LABELS, detection_arrays
 from .kalman_tracker import KalmanTracker
 from .settings import kalman_tracker_parts
@@ -62,8 +62,8 @@ class PerCameraMerge:
         cameras = np.array([c for c, _ in members])
         labels = np.array([t.label for _, t in members])
         scores = np.array([t.life.score for _, t in members])
-        iou, _ = overlaps(boxes, boxes, bev=True, floor=0.0)
-        linked = (iou >= self.merge_iou) & (cameras[:, None] != cameras[None, :]) & (labels[:, None] == labels[None, :])
+        linked = ((iou(boxes, boxes, bev=True) >= self.merge_iou) & (cameras[:, None] != cameras[None, :])
+                  & (labels[:, None] == labels[None, :]))
         count, group = connected_components(csr_matrix(linked), directed=False)
         keys = [(c, t.track_id) for c, t in members]
         taken: set[int] = set()

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .assignment import UNMATCHED, hungarian
-from .costs import overlaps
+from .costs import iou
 from .detections import DetectionArrays
 from .kalman_tracker import KalmanTracker
 from .settings import kalman_tracker_parts
@@ -24,9 +24,8 @@ def nms(detections: DetectionArrays, threshold: float) -> np.ndarray:
     order = np.lexsort((np.arange(len(detections)), -detections.scores))
     if len(order) == 0:
         return order
-    iou, _ = overlaps(detections.boxes3d, detections.boxes3d, floor=0.0)
     same = detections.labels[:, None] == detections.labels[None, :]
-    suppress = (iou > threshold) & same
+    suppress = (iou(detections.boxes3d, detections.boxes3d) > threshold) & same
     kept: list[int] = []
     removed = np.zeros(len(detections), dtype=bool)
     for j in order.tolist():
