@@ -44,6 +44,31 @@ def test_a_detector_only_change_made_from_the_recorded_world_equals_a_full_gener
     assert _files(reused) != _files(source.path)  # the detector did change
 
 
+def test_reruns_on_a_world_kept_in_memory_equal_a_full_generation(tmp_path, scenarios, monkeypatch):
+    # explain reruns the sensor on one world dozens of times per process: the second and later passes are
+    # served from memory, and must write what a full generation writes, each time.
+    import simrig.pipeline.recorded_world as recorded
+
+    base, other = scenarios
+    source = Dataset.open(generate(base, seed=3, out=tmp_path / "base").path)
+    full = _files(generate(other, seed=3, out=tmp_path / "full").path)
+    first = _files(generate(other, seed=3, out=tmp_path / "first", world_from=source).path)
+    assert recorded._memo is not None and recorded._memo[0][0] == source.manifest["manifest_sha256"]
+
+    def no_reading(*args, **kwargs):
+        raise AssertionError("the recorded world was read again")
+
+    monkeypatch.setattr(Dataset, "ground_truth_frames", no_reading)
+    for attempt in ("second", "third"):
+        assert _files(generate(other, seed=3, out=tmp_path / attempt, world_from=source).path) == full
+    assert first == full
+    monkeypatch.undo()
+    monkeypatch.setattr(recorded, "_memo", None)
+    monkeypatch.setattr(recorded, "MEMO_FRAMES_LIMIT", 11)  # a world longer than the limit is not kept
+    assert _files(generate(other, seed=3, out=tmp_path / "long", world_from=source).path) == full
+    assert recorded._memo is None
+
+
 def test_another_world_is_refused_naming_the_dataset(tmp_path, scenarios):
     base, _ = scenarios
     source = Dataset.open(generate(base, seed=3, out=tmp_path / "base").path)

@@ -10,7 +10,6 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 from tqdm import tqdm
 
 from simrig.dataset import Dataset, DatasetWriter, check_output_folder
@@ -18,6 +17,7 @@ from simrig.dataset.manifest import IMAGES_FOLDER, package_versions
 from simrig.dataset.tables import frame_columns
 from simrig.errors import DatasetError
 from simrig.geometry import Projection, project_boxes
+from simrig.pipeline.recorded_world import RecordedWorld
 from simrig.render.visibility import Visibility
 from simrig.rig import build_rig, rig_to_dict
 from simrig.scenarios import Scenario
@@ -97,7 +97,7 @@ def generate(
     times = StageTimes()
     started = time.perf_counter()
     world = (_SimulatedWorld(scenario, rig, streams, images) if world_from is None
-             else _RecordedWorld(world_from, rig))
+             else RecordedWorld(world_from, rig))
     events: list[dict] = []
     try:
         with DatasetWriter(out, overwrite=overwrite) as writer:
@@ -187,46 +187,3 @@ class _SimulatedWorld:
 
     def close(self) -> None:
         self.traffic.close()
-
-
-class _RecordedWorld:
-    """The world of an existing dataset: its ground truth and measured visibility, the projection recomputed
-    (it is a pure function of the boxes, cheaper than reading it back) — what the sensor model needs, no
-    simulation and no rendering. The frame's world events come from the dataset's manifest."""
-
-    def __init__(self, dataset: Dataset, rig):
-        self.rig = rig
-        self.markings = dataset.road_markings()
-        self._states = dataset.ground_truth_frames()
-        table = dataset.table("visibility")
-        self._frames = table.column("frame").to_numpy()
-        self._visible = table.column("visible_px").to_numpy().astype(np.int64)
-        self._silhouette = table.column("silhouette_px").to_numpy().astype(np.int64)
-        self._rendered = dataset.manifest.get("visibility") == "rendered"
-        self._events: dict[int, list[str]] = {}
-        for event in dataset.manifest.get("events", []):
-            self._events.setdefault(int(event["frame"]), []).append(event["event"])
-
-    def frame(self, frame: int, times: StageTimes) -> tuple[GroundTruthFrame, Projection, Visibility]:
-        tick = time.perf_counter()
-        recorded = next(self._states)
-        state = GroundTruthFrame(frame=recorded.frame, timestamp=recorded.timestamp, ego=recorded.ego,
-                                 actor_ids=recorded.actor_ids, classes=recorded.classes, boxes=recorded.boxes,
-                                 events=tuple(self._events.get(recorded.frame, ())))
-        times.traffic += time.perf_counter() - tick
-        tick = time.perf_counter()
-        projection = project_boxes(state.boxes, self.rig, state.ego)
-        times.projection += time.perf_counter() - tick
-        tick = time.perf_counter()
-        if self._rendered:
-            lo, hi = np.searchsorted(self._frames, [frame, frame + 1])
-            shape = (len(state.actor_ids), len(self.rig.cameras))
-            visibility = Visibility.from_counts(self._visible[lo:hi].reshape(shape).T,
-                                                self._silhouette[lo:hi].reshape(shape).T)
-        else:
-            visibility = Visibility.unmeasured(projection)
-        times.visibility += time.perf_counter() - tick
-        return state, projection, visibility
-
-    def close(self) -> None:
-        pass
