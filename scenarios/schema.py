@@ -202,8 +202,13 @@ def windows_outside(scenario: Scenario, frames: int) -> list[str]:
 
 def scenario_from_record(record: dict) -> Scenario:
     """The :class:`Scenario` of a resolved dump (``model_dump(mode="json")``, as a dataset manifest records
-    it): the rig keys its preset does not take are dropped (the dump holds every field; their values there
-    are the defaults, which the preset ignores), everything else validated as usual."""
+    it): the keys a setting refuses when written by hand are dropped — the rig keys its preset does not take,
+    and the lane count of a map other than highway-v0 (the dump holds every field; their values there are the
+    defaults, which the preset or map ignores) — everything else validated as usual."""
     rig = dict(record.get("rig", {}))
     allowed = _PRESET_KEYS.get(rig.get("preset", "surround6"), set()) | {"preset"}
-    return Scenario.model_validate({**record, "rig": {key: value for key, value in rig.items() if key in allowed}})
+    traffic = dict(record.get("traffic", {}))
+    if traffic.get("env", "highway-v0") != "highway-v0":
+        traffic.pop("lanes", None)
+    return Scenario.model_validate({**record, "traffic": traffic,
+                                    "rig": {key: value for key, value in rig.items() if key in allowed}})

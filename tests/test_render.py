@@ -143,3 +143,21 @@ def test_scene_bounds_work_under_numpy_2(meter):
     scene.set_frame(EGO, np.array(["car"], dtype=object), np.array([_box("car", 10.0, 0.0)]))
     scene.colour(build_rig(RigConfig()).cameras[0], build_rig(RigConfig()), EGO)  # places the nodes
     assert scene.scene.bounds[1, 0] == pytest.approx(10.0 + CLASS_SPECS[ActorClass.CAR].length / 2)
+
+
+def test_an_empty_pyopengl_platform_counts_as_unset():
+    # PYOPENGL_PLATFORM="" (a shell's `export PYOPENGL_PLATFORM=`) once kept PyOpenGL off EGL and every render
+    # failed on a machine without a display; empty now means "choose for me", as unset does.
+    import os
+    import subprocess
+    import sys
+
+    code = ("from simrig.render.scene import RigScene; from simrig.rig import build_rig; "
+            "from simrig.scenarios.schema import RigConfig; from simrig.types import EgoPose; "
+            "import os; rig = build_rig(RigConfig()); scene = RigScene(); "
+            "image = scene.colour(rig.cameras[0], rig, EgoPose(0.0, 0.0, 0.0, 0.0)); "
+            "print(os.environ['PYOPENGL_PLATFORM'], image.shape)")
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")} | {"PYOPENGL_PLATFORM": ""}
+    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split()[0] == "egl"

@@ -72,3 +72,13 @@ def test_extends_cycle_is_reported(tmp_path, monkeypatch):
     monkeypatch.setattr(scenarios, "CATALOG_DIR", tmp_path)
     with pytest.raises(ScenarioError, match="cycle"):
         load_scenario(tmp_path / "a.toml")
+
+
+@pytest.mark.parametrize("name", sorted(catalog()))
+def test_every_catalog_scenario_is_read_back_from_its_manifest_record(name):
+    # A dataset's manifest holds the resolved scenario (every field, defaults included); explain, the perf
+    # cache and the bench read it back. The roundabout once failed here: its dump holds highway-v0's lane count.
+    from simrig.scenarios.schema import scenario_from_record
+
+    scenario = load_scenario(name)
+    assert scenario_from_record(scenario.model_dump(mode="json")) == scenario

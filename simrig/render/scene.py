@@ -15,7 +15,8 @@ from __future__ import annotations
 import functools
 import os
 
-os.environ.setdefault("PYOPENGL_PLATFORM", "egl")  # headless: must precede the first OpenGL import
+if not os.environ.get("PYOPENGL_PLATFORM"):  # unset or empty: headless EGL (must precede the first OpenGL import)
+    os.environ["PYOPENGL_PLATFORM"] = "egl"
 
 import numpy as np  # noqa: E402
 
