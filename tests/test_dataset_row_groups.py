@@ -9,7 +9,9 @@ import pyarrow.parquet as pq
 import pytest
 
 import simrig.dataset.writer as writer_module
+from simrig.causes import CAUSE_BITS, Cause
 from simrig.dataset import Dataset
+from simrig.dataset.ground_truth import CAUSE_DTYPE, load_depth
 from simrig.pipeline.generate import generate
 from simrig.types import LABELS
 
@@ -41,11 +43,46 @@ def test_the_split_dataset_has_several_row_groups(split_and_whole):
 def test_ground_truth_does_not_depend_on_row_groups(split_and_whole):
     split, whole = (dataset.ground_truth for dataset in split_and_whole)
     for name in ("frames", "timestamps", "frame", "actor_id", "label", "boxes", "boxes2d", "in_view", "truncation",
-                 "depth", "occlusion", "causes", "detected", "probability"):
+                 "occlusion", "causes", "detected"):
         a, b = getattr(split, name), getattr(whole, name)
         assert a.dtype == b.dtype and a.shape == b.shape, name
         assert np.array_equal(a, b, equal_nan=a.dtype.kind == "f"), name
     assert split.egos == whole.egos and split.events == whole.events
+    assert np.array_equal(load_depth(split_and_whole[0]), load_depth(split_and_whole[1]))
+
+
+def test_ground_truth_holds_the_tables_values(split_and_whole):
+    """Every per-camera array is the table's column (read whole here, by pyarrow), in rig order per row."""
+    dataset = split_and_whole[0]
+    truth = dataset.ground_truth
+    n, c = len(truth.frame), len(dataset.rig.camera_names)
+    projections = pq.read_table(dataset.path / "projections.parquet").to_pydict()
+    visibility = pq.read_table(dataset.path / "visibility.parquet").to_pydict()
+    boxes = np.array([projections[k] for k in ("x1", "y1", "x2", "y2")], dtype=float).T.reshape(n, c, 4)
+    assert np.array_equal(truth.boxes2d, boxes, equal_nan=True)
+    for camera in range(c):  # only the boxes in view are held; picked by (row, camera)
+        seen = np.nonzero(truth.in_view[:, camera])[0]
+        assert np.array_equal(truth.boxes2d_in(seen[::-1], camera), boxes[seen[::-1], camera])
+        assert not np.isnan(truth.boxes2d_in(seen, camera)).any()
+    with pytest.raises(KeyError, match="not in view of camera 0"):
+        truth.boxes2d_in(np.nonzero(~truth.in_view[:, 0])[0][:1], 0)
+    for name, column in (("truncation", projections["truncation"]), ("occlusion", visibility["occlusion"])):
+        assert np.array_equal(getattr(truth, name), np.array(column, dtype=float).reshape(n, c), equal_nan=True)
+    assert np.array_equal(load_depth(dataset), np.array(projections["depth"], dtype=float).reshape(n, c))
+    assert truth.in_view.tolist() == np.array(projections["in_view"]).reshape(n, c).tolist()
+    sensor = pq.read_table(dataset.path / "sensor_truth.parquet").to_pydict()
+    for frame, camera, actor, detection, causes in zip(sensor["frame"], sensor["camera"], sensor["actor_id"],
+                                                        sensor["detection"], sensor["causes"], strict=True):
+        if actor < 0:
+            continue
+        row, column = truth.rows_of(np.array([frame]), np.array([actor]))[0], dataset.rig.camera_names.index(camera)
+        assert truth.detected[row, column] == (detection >= 0)
+        assert truth.causes[row, column] == sum(int(Cause[name.upper()]) for name in causes)
+    assert truth.in_view.any() and not truth.in_view.all() and truth.causes.any() and truth.detected.any()
+
+
+def test_cause_masks_fit_their_type():
+    assert int(CAUSE_BITS.max()) <= np.iinfo(CAUSE_DTYPE).max
 
 
 def test_summary_does_not_depend_on_row_groups(split_and_whole):

@@ -130,7 +130,7 @@ def test_kitti_labels_hold_every_box_in_view_with_the_projected_depth_and_dont_c
             row = np.nonzero((truth.frame == frame) & (truth.actor_id == actor))[0][0]
             fraction = truncation[(frame, actor, camera)]
             assert int(f[3]) == (0 if fraction <= 1e-9 else 1 if fraction <= 0.5 else 2)
-            assert [float(v) for v in f[6:10]] == pytest.approx(truth.boxes2d[row, c], abs=1e-3)
+            assert [float(v) for v in f[6:10]] == pytest.approx(truth.boxes2d_in([row], c)[0], abs=1e-3)
             assert float(f[15]) == pytest.approx(depth[(frame, actor, camera)], abs=1e-3)  # level cameras: z of centre
             assert [float(v) for v in f[10:13]] == pytest.approx(truth.boxes[row, [5, 4, 3]], abs=1e-3)  # h, w, l
 

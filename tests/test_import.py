@@ -220,6 +220,7 @@ def test_imported_dataset_renders_and_summarises(tmp_path, capsys):
     assert main(["info", str(tmp_path / "ds"), "--verify"]) == 0
     out = capsys.readouterr().out
     assert "imported from motchallenge" in out and "error causes unknown" in out
+    assert "sensor    none (an imported dataset holds ground truth only)" in out and "missed" not in out
     if importlib.util.find_spec("rerun") is not None:  # the viewer is an optional extra
         assert main(["view", str(tmp_path / "ds"), "--save", str(tmp_path / "v.rrd")]) == 0
         assert (tmp_path / "v.rrd").stat().st_size > 1000

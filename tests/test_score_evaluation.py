@@ -36,9 +36,8 @@ def hand_built_truth(rows):
     return GroundTruth(
         rig=rig, frames=np.array([0]), timestamps=np.array([0.0]), egos=(EgoPose(0, 0, 0, 0),), events=((),),
         frame=np.zeros(n, np.int64), actor_id=np.arange(n), label=np.array([r[0] for r in rows], dtype=object),
-        boxes=boxes, boxes2d=boxes2d, in_view=in_view, truncation=truncation, depth=np.full((n, 2), 10.0),
-        occlusion=occlusion, causes=np.zeros((n, 2), np.int64), detected=np.zeros((n, 2), bool),
-        probability=np.zeros((n, 2)))
+        boxes=boxes, in_view=in_view, view_boxes2d=boxes2d[in_view], view_truncation=truncation[in_view],
+        view_occlusion=occlusion[in_view], causes=np.zeros((n, 2), np.int32), detected=np.zeros((n, 2), bool))
 
 
 TALL = [0.0, 0.0, 50.0, 30.0]  # 30 px high

@@ -145,7 +145,7 @@ def test_generated_dataset_matches_trackeval(small_dataset):
         c = truth.rig.camera_names.index(seq.camera)
         g = np.nonzero(truth.in_view[:, c] & (truth.label == seq.label))[0]
         t = np.nonzero((tracks.camera == seq.camera) & (tracks.label == seq.label))[0]
-        data = trackeval_data(truth.frames, truth.frame[g], truth.actor_id[g], truth.boxes2d[g, c],
+        data = trackeval_data(truth.frames, truth.frame[g], truth.actor_id[g], truth.boxes2d_in(g, c),
                               tracks.frame[t], tracks.track_id[t], tracks.boxes[t])
         theirs = flatten(trackeval_metrics({"s": data})["s"])
         assert_same(simrig_metrics(simrig_counts(seq)), theirs, seq.name)

@@ -44,6 +44,21 @@ def test_round_trip(tmp_path):
     assert tracks.tracks2d.camera.tolist() == ["CAM_A"] and tracks.tracks2d.boxes.tolist() == [[1, 2, 30, 40]]
 
 
+def test_rows_in_any_order_come_back_sorted_by_frame_then_as_written(tmp_path):
+    """Rows are read a column at a time; a file in several row groups, rows out of frame order: sorted by
+    frame, ties in file order, every column moved with its row."""
+    table = table3d(frame=[1, 0, 1, 0, 2], track_id=[5, 6, 7, 8, 9], **{"class": ["car"] * 5},
+                    score=[0.1, 0.2, 0.3, 0.4, 0.5], x=[1.0, 2.0, 3.0, 4.0, 5.0], y=[0.0] * 5, z=[0.8] * 5,
+                    length=[4.6] * 5, width=[1.9] * 5, height=[1.6] * 5, yaw=[0.0] * 5, vx=[1.0] * 5, vy=[0.0] * 5)
+    path = tmp_path / "tracks.parquet"
+    pq.write_table(table, path, row_group_size=2)
+    assert pq.ParquetFile(path).num_row_groups == 3
+    rows = read_tracks(path, frame_count=3, cameras=CAMERAS).tracks3d
+    assert rows.frame.tolist() == [0, 0, 1, 1, 2] and rows.track_id.tolist() == [6, 8, 5, 7, 9]
+    assert rows.score.tolist() == [0.2, 0.4, 0.1, 0.3, 0.5] and rows.boxes[:, 0].tolist() == [2, 4, 1, 3, 5]
+    assert rows.frame.dtype == np.int64 and rows.boxes.flags.writeable
+
+
 @pytest.mark.parametrize(("table", "message"), [
     (table3d(x=[1.0, float("nan"), 3.0]), "row 1 (frame 0, track 2): column 'x' is nan"),
     (table3d(track_id=[1, 1, 1]), "row 1 (frame 0, track 1): track id 1 appears twice in this frame (also row 0)"),

@@ -14,7 +14,7 @@ from simrig.scenarios import describe_errors
 from simrig.scenarios.evaluation_schema import EvaluationConfig
 
 from ..errors import SimrigError
-from .ground_truth import SOURCE_KINDS, GroundTruth
+from .ground_truth import SOURCE_KINDS, GroundTruth, per_label
 
 
 class EvaluationError(SimrigError):
@@ -80,25 +80,29 @@ def evaluation_overrides(pairs: list[tuple[str, object]] | None) -> dict:
     return out
 
 
+RULE_DTYPE = np.int8
+"""The type of :func:`ignore_rules`' bit masks (six rules)."""
+
+
 def ignore_rules(truth: GroundTruth, config: EvaluationConfig) -> np.ndarray:
-    """``(R, C)`` :class:`IgnoreRule` bits of every ground-truth box in every camera (0: scored, or not in
-    view). Vectorised over rows and cameras."""
-    rules = np.zeros(truth.in_view.shape, dtype=np.int64)
+    """``(R, C)`` :class:`IgnoreRule` bits (:data:`RULE_DTYPE`) of every ground-truth box in every camera (0:
+    scored, or not in view). Vectorised over the boxes in view."""
+    rules = np.zeros(truth.in_view.shape, dtype=RULE_DTYPE)
     if not config.ignore or rules.size == 0:
         return rules
-    labels, inverse = np.unique(truth.label, return_inverse=True)
-    limit = np.array([config.class_range_m(str(label)) for label in labels])[inverse.reshape(-1)]
-    rules[truth.ego_distance >= limit] |= int(IgnoreRule.RANGE)
-    # One (R, C) temporary at a time: a long run's per-camera arrays are large.
-    rules[truth.boxes2d[..., 3] - truth.boxes2d[..., 1] < config.min_height_px] |= int(IgnoreRule.HEIGHT)
-    visible = 1.0 - truth.occlusion
-    rules[np.isfinite(visible) & (visible <= config.min_visible_fraction)] |= int(IgnoreRule.VISIBILITY)
-    del visible
-    rules[truth.truncation > config.max_truncation] |= int(IgnoreRule.TRUNCATION)
+    row, camera = np.nonzero(truth.in_view)  # the order of the ground truth's view_* arrays
+    limit = per_label(truth.label, config.class_range_m)
+    bits = np.where((truth.ego_distance >= limit)[row], int(IgnoreRule.RANGE), 0).astype(RULE_DTYPE)
+    boxes = truth.view_boxes2d
+    bits[boxes[:, 3] - boxes[:, 1] < config.min_height_px] |= int(IgnoreRule.HEIGHT)
+    visible = 1.0 - truth.view_occlusion
+    bits[np.isfinite(visible) & (visible <= config.min_visible_fraction)] |= int(IgnoreRule.VISIBILITY)
+    bits[truth.view_truncation > config.max_truncation] |= int(IgnoreRule.TRUNCATION)
     if truth.source_ignored is not None:
-        rules[truth.source_ignored == 1 + SOURCE_KINDS.index("distractor")] |= int(IgnoreRule.SOURCE)
-        rules[truth.source_ignored == 1 + SOURCE_KINDS.index("unevaluated")] |= int(IgnoreRule.UNEVALUATED)
-    rules[~truth.in_view] = 0
+        marked = truth.source_ignored[row, camera]
+        bits[marked == 1 + SOURCE_KINDS.index("distractor")] |= int(IgnoreRule.SOURCE)
+        bits[marked == 1 + SOURCE_KINDS.index("unevaluated")] |= int(IgnoreRule.UNEVALUATED)
+    rules[row, camera] = bits
     return rules
 
 

@@ -28,6 +28,10 @@ from .tracks_file import TrackRows
 if TYPE_CHECKING:
     from .reader import Dataset
 
+CAUSE_DTYPE = np.int32
+"""The type of :attr:`GroundTruth.causes`' bit masks: room for 31 :class:`~simrig.causes.Cause` bits, half the
+bytes of int64 (it is ``(R, C)``, one of the largest arrays a long dataset's ground truth holds)."""
+
 
 @dataclass(frozen=True, eq=False)
 class GroundTruth:
@@ -35,15 +39,23 @@ class GroundTruth:
 
     frames: ``(F,)`` frame numbers; timestamps ``(F,)`` [s]; egos: the ego pose per frame; events: the
     perturbation events active per frame. frame, actor_id, label: ``(R,)``; boxes: ``(R, 9)`` world boxes
-    (:data:`~simrig.types.BOX3D_FIELDS`). Per camera, ``(R, C)``: boxes2d ``(R, C, 4)`` pixel boxes (NaN: not
-    in view); in_view; truncation [0, 1] (fraction of the unclipped projected box outside the image);
-    depth [m] (camera-frame z); occlusion [0, 1] (1 − visible / silhouette pixels; NaN: not rendered);
-    causes: every cause recorded for the actor in that camera; detected: whether that camera's detector
-    reported it; probability: its detection probability. source_ignored: ``(R, C)`` what the source of an
-    imported dataset marks each box as (0: nothing; 1 + an index into :data:`SOURCE_KINDS`: a distractor — a
-    MOTChallenge distractor class, KITTI ``DontCare`` — or ground truth its benchmark does not evaluate), or
-    ``None`` when it marks none. causes_known: ``False`` for imported ground truth, which records no sensor and
-    so no causes (an error's cause is then ``unknown``, never ``none``).
+    (:data:`~simrig.types.BOX3D_FIELDS`). Per camera, ``(R, C)`` in rig order: in_view; causes: every cause
+    recorded for the actor in that camera (:data:`CAUSE_DTYPE` bit masks); detected: whether that camera's
+    detector reported it. source_ignored: ``(R, C)`` what the source of an imported dataset marks each box as
+    (0: nothing; 1 + an index into :data:`SOURCE_KINDS`: a distractor — a MOTChallenge distractor class, KITTI
+    ``DontCare`` — or ground truth its benchmark does not evaluate), or ``None`` when it marks none.
+    causes_known: ``False`` for imported ground truth, which records no sensor and so no causes (an error's
+    cause is then ``unknown``, never ``none``).
+
+    What exists only where the actor is in view is held for those ``V`` (row, camera) pairs alone, in
+    row-major order (that of ``np.nonzero(in_view)``, the tables' own; a long run has most actors out of most
+    cameras): view_boxes2d ``(V, 4)`` pixel boxes; view_truncation ``(V,)`` [0, 1] (fraction of the unclipped
+    projected box outside the image); view_occlusion ``(V,)`` [0, 1] (1 − visible / silhouette pixels; NaN:
+    not rendered). :meth:`boxes2d_in` picks boxes of one camera; :attr:`boxes2d`, :attr:`truncation` and
+    :attr:`occlusion` form the dense ``(R, C)`` arrays (NaN where not in view, as the tables have them).
+
+    Not held, as nothing that judges tracks reads them: each box's depth (:func:`load_depth` reads it) and the
+    detector's probability of each detection (in the ``sensor_truth`` table).
     """
 
     rig: Rig
@@ -55,22 +67,60 @@ class GroundTruth:
     actor_id: np.ndarray
     label: np.ndarray
     boxes: np.ndarray
-    boxes2d: np.ndarray
     in_view: np.ndarray
-    truncation: np.ndarray
-    depth: np.ndarray
-    occlusion: np.ndarray
+    view_boxes2d: np.ndarray
+    view_truncation: np.ndarray
+    view_occlusion: np.ndarray
     causes: np.ndarray
     detected: np.ndarray
-    probability: np.ndarray
     source_ignored: np.ndarray | None = None
     causes_known: bool = True
 
+    def view_index(self, rows: np.ndarray, camera: int) -> np.ndarray:
+        """Index into the ``view_*`` arrays of each of ``rows`` in camera ``camera`` (rig order); a ``KeyError``
+        for a row that camera does not see."""
+        flat = np.asarray(rows, dtype=np.int64) * self.in_view.shape[1] + camera
+        position = np.searchsorted(self._view_flat, flat)
+        found = position < len(self._view_flat)
+        found[found] = self._view_flat[position[found]] == flat[found]
+        if not found.all():
+            raise KeyError(f"some rows are not in view of camera {camera}")
+        return position
+
+    def boxes2d_in(self, rows: np.ndarray, camera: int) -> np.ndarray:
+        """``(n, 4)`` pixel boxes of ``rows`` (all in view) in camera ``camera`` (rig order)."""
+        return self.view_boxes2d[self.view_index(rows, camera)].reshape(-1, 4)
+
     @property
-    def miss_causes(self) -> np.ndarray:
-        """``(R, C)`` why each camera did not deliver the actor: its causes where it was missed, 0 where it
-        was detected (an error there is the tracker's own)."""
-        return np.where(self.detected, 0, self.causes)
+    def boxes2d(self) -> np.ndarray:
+        """``(R, C, 4)`` pixel boxes, NaN where not in view: formed on each call (a long run's is large; the
+        scorer and exports use :meth:`boxes2d_in`)."""
+        return self._dense(self.view_boxes2d)
+
+    @property
+    def truncation(self) -> np.ndarray:
+        """``(R, C)`` truncation [0, 1], NaN where not in view (formed on each call)."""
+        return self._dense(self.view_truncation)
+
+    @property
+    def occlusion(self) -> np.ndarray:
+        """``(R, C)`` occlusion ratio [0, 1], NaN where not in view or not rendered (formed on each call)."""
+        return self._dense(self.view_occlusion)
+
+    def _dense(self, values: np.ndarray) -> np.ndarray:
+        dense = np.full((*self.in_view.shape, *values.shape[1:]), np.nan)
+        dense[self.in_view] = values
+        return dense
+
+    @cached_property
+    def _view_flat(self) -> np.ndarray:
+        """``(V,)`` flat index ``row · C + camera`` of each pair in view (increasing)."""
+        return np.flatnonzero(self.in_view)
+
+    def miss_causes(self, camera: int) -> np.ndarray:
+        """``(R,)`` why camera ``camera`` (index in rig order) did not deliver the actor: its causes where it
+        was missed, 0 where it was detected (an error there is the tracker's own)."""
+        return np.where(self.detected[:, camera], 0, self.causes[:, camera])
 
     @property
     def miss_causes_3d(self) -> np.ndarray:
@@ -84,7 +134,10 @@ class GroundTruth:
     @cached_property
     def camera_sets(self) -> np.ndarray:
         """``(R,)`` bit mask of the cameras that have the actor in view (bit c: camera c in rig order)."""
-        return np.sum(self.in_view.astype(np.int64) << np.arange(self.in_view.shape[1]), axis=1)
+        sets = np.zeros(len(self.in_view), dtype=np.int64)
+        for camera in range(self.in_view.shape[1]):  # one (R,) temporary at a time
+            sets[self.in_view[:, camera]] |= 1 << camera
+        return sets
 
     @cached_property
     def ego_distance(self) -> np.ndarray:
@@ -125,11 +178,28 @@ class GroundTruth:
         return self._keys(self.frame, self.actor_id)[self._key_order]
 
 
+def per_label(labels: np.ndarray, value_of) -> np.ndarray:
+    """``(n,)`` ``value_of(label)`` [float] of each of ``labels`` (class names), called once per class present;
+    no temporary but a mask per class (a long run has 200,000 rows of 2–4 classes).
+
+    >>> per_label(np.array(["car", "bus", "car"], dtype=object), {"car": 50.0, "bus": 60.0}.get).tolist()
+    [50.0, 60.0, 50.0]
+    """
+    values = np.empty(len(labels))
+    for label in set(labels):
+        values[labels == label] = value_of(str(label))
+    return values
+
+
 def _read_columns(dataset: Dataset, table: str, names: tuple[str, ...], rows: int, *,
-                  per_camera: int | None = None) -> dict[str, np.ndarray]:
+                  per_camera: int | None = None, into: dict[str, np.ndarray] | None = None,
+                  keep: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """Columns ``names`` of ``table`` as ``(rows,)`` arrays of their schema's type, filled a row group at a time
     (nothing but the arrays is held). ``per_camera``: the table is per (frame, actor, camera), written
-    actor-major in rig order; ``rows`` actors × ``per_camera`` cameras rows, a :class:`DatasetError` otherwise."""
+    actor-major in rig order; ``rows`` actors × ``per_camera`` cameras rows, a :class:`DatasetError` otherwise.
+    ``keep``: a mask over the table's rows; only the rows it keeps are read into the arrays (of its count of
+    ``True``). ``into``: arrays of the caller's (e.g. the strided columns of one ``(n, 4)`` array) that columns
+    of the same names are written into, so that no second copy of them is made; those are not returned."""
     expected = rows if per_camera is None else rows * per_camera  # a dataset without cameras: none per camera
     found = dataset.num_rows(table)
     if per_camera is not None and found != expected:
@@ -138,13 +208,18 @@ def _read_columns(dataset: Dataset, table: str, names: tuple[str, ...], rows: in
     if found != expected:
         raise DatasetError(f"{dataset.path}: {table} has {found} rows, {expected} expected")
     schema = SCHEMAS[table]
-    out = {name: np.empty(expected, dtype=schema.field(name).type.to_pandas_dtype()) for name in names}
-    start = 0
-    for group in dataset.batches(table, list(names)):
+    into = into or {}
+    size = expected if keep is None else int(np.count_nonzero(keep))
+    out = {name: np.empty(size, dtype=schema.field(name).type.to_pandas_dtype()) for name in names}
+    start = kept = 0
+    for group in dataset.batches(table, [*names, *into]):
         stop = start + len(group)
-        for name in names:
-            out[name][start:stop] = group.column(name).to_numpy(zero_copy_only=False)
-        start = stop
+        mask = None if keep is None else keep[start:stop]
+        count = len(group) if mask is None else int(np.count_nonzero(mask))
+        for name, array in (*out.items(), *into.items()):
+            values = group.column(name).to_numpy(zero_copy_only=False)
+            array[kept:kept + count] = values if mask is None else values[mask]
+        start, kept = stop, kept + count
     return out
 
 
@@ -216,12 +291,13 @@ def load_ground_truth(dataset: Dataset) -> GroundTruth:
     ego_columns = {name: ego.column(name).to_numpy() for name in ("x", "y", "z", "yaw", "vx", "vy")}
     egos = tuple(EgoPose(*(float(ego_columns[name][i]) for name in ego_columns)) for i in range(len(frames)))
     n = dataset.num_rows("ground_truth")
-    truth = _read_columns(dataset, "ground_truth", ("frame", "actor_id", *BOX3D_FIELDS), n)
-    projections = _read_columns(dataset, "projections", (*BOX2D_FIELDS, "truncation", "depth", "in_view"), n,
-                                per_camera=c)
-    boxes2d = np.empty((n * c, 4))
-    for i, name in enumerate(BOX2D_FIELDS):
-        boxes2d[:, i] = projections.pop(name)
+    boxes = np.empty((n, 9))
+    truth = _read_columns(dataset, "ground_truth", ("frame", "actor_id"), n,
+                          into={name: boxes[:, i] for i, name in enumerate(BOX3D_FIELDS)})
+    in_view = _read_columns(dataset, "projections", ("in_view",), n, per_camera=c)["in_view"]
+    boxes2d = np.empty((int(np.count_nonzero(in_view)), 4))
+    truncation = _read_columns(dataset, "projections", ("truncation",), n, per_camera=c, keep=in_view,
+                               into={name: boxes2d[:, i] for i, name in enumerate(BOX2D_FIELDS)})["truncation"]
     ground_truth = GroundTruth(
         rig=rig,
         frames=frames,
@@ -231,20 +307,19 @@ def load_ground_truth(dataset: Dataset) -> GroundTruth:
         frame=truth.pop("frame").astype(np.int64),
         actor_id=truth.pop("actor_id"),
         label=_strings(dataset, "ground_truth", "class"),
-        boxes=np.column_stack([truth.pop(name) for name in BOX3D_FIELDS]).reshape(n, 9),
-        boxes2d=boxes2d.reshape(n, c, 4),
-        in_view=projections.pop("in_view").reshape(n, c).astype(bool),
-        truncation=projections.pop("truncation").reshape(n, c),
-        depth=projections.pop("depth").reshape(n, c),
-        occlusion=_read_columns(dataset, "visibility", ("occlusion",), n, per_camera=c)["occlusion"].reshape(n, c),
-        causes=np.zeros((n, c), dtype=np.int64),
+        boxes=boxes,
+        in_view=in_view.reshape(n, c),
+        view_boxes2d=boxes2d,
+        view_truncation=truncation,
+        view_occlusion=_read_columns(dataset, "visibility", ("occlusion",), n, per_camera=c,
+                                     keep=in_view)["occlusion"],
+        causes=np.zeros((n, c), dtype=CAUSE_DTYPE),
         detected=np.zeros((n, c), dtype=bool),
-        probability=np.zeros((n, c)),
         source_ignored=_source_ignored(dataset, n, c),
         causes_known=dataset.causes_known,
     )
     camera_of = {name: i for i, name in enumerate(cameras)}
-    for sensor in dataset.batches("sensor_truth"):
+    for sensor in dataset.batches("sensor_truth", ["frame", "camera", "actor_id", "detection", "causes"]):
         actor = sensor.column("actor_id").to_numpy()
         real = actor >= 0
         if not real.any():
@@ -253,8 +328,14 @@ def load_ground_truth(dataset: Dataset) -> GroundTruth:
         camera = string_codes(sensor.column("camera"), camera_of, f"{dataset.path}: sensor_truth camera")[real]
         ground_truth.causes[rows, camera] = _cause_masks(sensor.column("causes"))[real]
         ground_truth.detected[rows, camera] = sensor.column("detection").to_numpy()[real] >= 0
-        ground_truth.probability[rows, camera] = sensor.column("probability").to_numpy()[real]
     return ground_truth
+
+
+def load_depth(dataset: Dataset) -> np.ndarray:
+    """``(R, C)`` camera-frame depth [m] of every (frame, actor) row of the ground truth in every camera (rig
+    order), read a row group at a time: what :class:`GroundTruth` does not hold."""
+    n, c = dataset.num_rows("ground_truth"), len(dataset.rig.camera_names)
+    return _read_columns(dataset, "projections", ("depth",), n, per_camera=c)["depth"].reshape(n, c)
 
 
 def project_tracks(truth: GroundTruth, tracks3d: TrackRows) -> TrackRows:

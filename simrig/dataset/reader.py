@@ -29,7 +29,7 @@ from ..types import (
     SensorFrame,
 )
 from .arrow_columns import string_codes
-from .ground_truth import GroundTruth
+from .ground_truth import GroundTruth, load_depth
 from .manifest import MANIFEST_NAME, file_sha256, folder_digest, read_manifest
 from .tables import SCHEMAS
 
@@ -330,15 +330,16 @@ class Dataset:
         """Every frame's :class:`GroundTruthFrame`, in order, with per-camera projections: views on
         :attr:`ground_truth`."""
         truth = self.ground_truth
+        boxes2d, truncation, occlusion, depth = truth.boxes2d, truth.truncation, truth.occlusion, load_depth(self)
         for position, frame in enumerate(truth.frames):
             rows = truth.frame_rows(position)
             per_camera = {
                 name: CameraGroundTruth(
-                    boxes=truth.boxes2d[rows, index],
-                    truncation=truth.truncation[rows, index],
-                    depth=truth.depth[rows, index],
+                    boxes=boxes2d[rows, index],
+                    truncation=truncation[rows, index],
+                    depth=depth[rows, index],
                     in_view=truth.in_view[rows, index],
-                    occlusion=truth.occlusion[rows, index],
+                    occlusion=occlusion[rows, index],
                 )
                 for index, name in enumerate(truth.rig.camera_names)
             }
@@ -457,9 +458,10 @@ class Dataset:
             f"rig       {self.rig.name}: {', '.join(self.rig.camera_names) or 'no cameras (3D only)'}",
             f"rows      ground_truth {truth_rows}, projections {projection_rows} "
             f"({in_view_pairs} in view)",
-            f"sensor    {self.num_rows('detections')} detections ({clutter} false positives), "
-            f"{missed} actor-camera pairs in view missed; {dropped} frames dropped; "
-            f"visibility {self.manifest.get('visibility', 'not measured')}",
+            (f"sensor    {self.num_rows('detections')} detections ({clutter} false positives), "
+             f"{missed} actor-camera pairs in view missed; {dropped} frames dropped; "
+             f"visibility {self.manifest.get('visibility', 'not measured')}") if self.source is None
+            else "sensor    none (an imported dataset holds ground truth only)",
             f"events    {event_text or 'none'}",
         ]
         source = self.source

@@ -19,7 +19,7 @@ outside the dataset, an empty box, and a track id used twice in one frame (per c
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -154,7 +154,8 @@ def tracks_in_memory(tables: dict[str, pa.Table], *, frame_count: int, cameras: 
                      source: str = "tracker output") -> TrackSet:
     """A validated :class:`TrackSet` of :func:`track_tables`' tables, without a round trip through files:
     the same checks as :func:`read_tracks`, errors naming ``source``."""
-    rows = {name: _rows(f"{source} ({name})", table, name, frame_count, cameras) for name, table in tables.items()}
+    rows = {name: _rows(f"{source} ({name})", table.column_names, table.column, name, frame_count, cameras)
+            for name, table in tables.items()}
     return TrackSet(source=source, tracks3d=rows.get(TRACKS3D_FILE), tracks2d=rows.get(TRACKS2D_FILE))
 
 
@@ -205,26 +206,41 @@ def _layout_of(file: Path) -> str:
 
 
 def _read(file: Path, layout: str, frame_count: int, cameras: tuple[str, ...]) -> TrackRows:
+    """Read ``file`` a column at a time, each copied out of Arrow's buffers before the next is read: a long run's
+    tracks are held once, as numpy, with Arrow's memory of one column at a time on top (not the whole table's,
+    which its allocator keeps after it is freed)."""
+    def unreadable(error: Exception) -> TracksError:
+        return TracksError(f"{file}: not a readable Parquet file ({error})")
+
     try:
-        table = pq.read_table(file)
+        parquet = pq.ParquetFile(file)
     except (pa.ArrowInvalid, OSError) as error:
-        raise TracksError(f"{file}: not a readable Parquet file ({error})") from None
-    return _rows(file, table, layout, frame_count, cameras)
+        raise unreadable(error) from None
+
+    def column(name: str) -> pa.ChunkedArray:
+        try:
+            return parquet.read(columns=[name]).column(0)
+        except (pa.ArrowInvalid, OSError) as error:
+            raise unreadable(error) from None
+
+    return _rows(file, parquet.schema_arrow.names, column, layout, frame_count, cameras)
 
 
-def _rows(file: Path | str, table: pa.Table, layout: str, frame_count: int, cameras: tuple[str, ...]) -> TrackRows:
-    """Validate ``table`` (``layout``: which file it is) and sort it; errors name ``file``, column and row."""
+def _rows(file: Path | str, names: list[str], column: Callable[[str], pa.ChunkedArray], layout: str,
+          frame_count: int, cameras: tuple[str, ...]) -> TrackRows:
+    """Validate a table of columns ``names``, each given by ``column(name)`` (``layout``: which file it is), and
+    sort it; errors name ``file``, column and row. Each column is copied out of Arrow at once (so that a column
+    read from a file is freed before the next is read); rows already in order are not copied again."""
     schema = TRACKS3D_SCHEMA if layout == TRACKS3D_FILE else TRACKS2D_SCHEMA
-    missing = [name for name in schema.names if name not in table.column_names]
+    missing = [name for name in schema.names if name not in names]
     if missing:
         raise TracksError(f"{file}: missing column(s) {', '.join(missing)} (a {layout} file has: "
                           f"{', '.join(schema.names)})")
-    unknown = [name for name in table.column_names if name not in schema.names]
+    unknown = [name for name in names if name not in schema.names]
     if unknown:
         raise TracksError(f"{file}: unknown column(s) {', '.join(unknown)} (a {layout} file has: "
                           f"{', '.join(schema.names)})")
-    columns = {field.name: _column(file, table, field) for field in schema}
-    del table  # only the numpy columns from here on
+    columns = {field.name: _column(file, column(field.name), field) for field in schema}
     frame, track_id = columns["frame"], columns["track_id"]
 
     def fail(row: int, what: str) -> None:
@@ -250,7 +266,7 @@ def _rows(file: Path | str, table: pa.Table, layout: str, frame_count: int, came
         if len(unknown_camera):
             fail(int(unknown_camera[0]), f"unknown camera {columns['camera'][unknown_camera[0]]!r} "
                                          f"(cameras: {', '.join(cameras)})")
-        boxes = np.column_stack([columns[name] for name in BOX2D_FIELDS]).reshape(-1, 4)
+        boxes = np.column_stack([columns.pop(name) for name in BOX2D_FIELDS]).reshape(-1, 4)
         empty = np.nonzero((boxes[:, 2] <= boxes[:, 0]) | (boxes[:, 3] <= boxes[:, 1]))[0]
         if len(empty):
             fail(int(empty[0]), f"empty box {boxes[empty[0]].tolist()} (needs x2 > x1 and y2 > y1)")
@@ -258,7 +274,7 @@ def _rows(file: Path | str, table: pa.Table, layout: str, frame_count: int, came
         camera_index = np.argsort(cameras)[camera_index]
         group = (camera_index,)
     else:
-        boxes = np.column_stack([columns[name] for name in BOX3D_FIELDS]).reshape(-1, 9)
+        boxes = np.column_stack([columns.pop(name) for name in BOX3D_FIELDS]).reshape(-1, 9)
         flat = np.nonzero(np.any(boxes[:, 3:6] <= 0.0, axis=1))[0]
         if len(flat):
             fail(int(flat[0]), f"box size {boxes[flat[0], 3:6].tolist()} must be positive (length, width, height)")
@@ -269,19 +285,20 @@ def _rows(file: Path | str, table: pa.Table, layout: str, frame_count: int, came
     if len(repeated):
         first, second = order[repeated[0]], order[repeated[0] + 1]
         fail(int(second), f"track id {track_id[second]} appears twice in this frame (also row {first})")
+    rows = slice(None) if np.array_equal(order, np.arange(len(order))) else order  # a tracker's own file is in order
     return TrackRows(
-        frame=frame[order].astype(np.int64),
-        track_id=track_id[order],
-        label=columns["class"][order],
-        score=columns["score"][order],
-        boxes=boxes[order],
-        camera=columns["camera"][order] if layout == TRACKS2D_FILE else None,
+        frame=frame[rows],
+        track_id=track_id[rows],
+        label=columns["class"][rows],
+        score=columns["score"][rows],
+        boxes=boxes[rows],
+        camera=columns["camera"][rows] if layout == TRACKS2D_FILE else None,
     )
 
 
-def _column(file: Path | str, table: pa.Table, field: pa.Field) -> np.ndarray:
-    """One column as numpy in the field's type; errors name the column (and the first null's row)."""
-    column = table.column(field.name)
+def _column(file: Path | str, column: pa.ChunkedArray, field: pa.Field) -> np.ndarray:
+    """One column as a numpy array of its own (not a view on Arrow's buffers) in the field's type; errors name
+    the column (and the first null's row)."""
     if column.null_count:
         row = int(pc.index(pc.is_null(column), True).as_py())
         raise TracksError(f"{file}: row {row}: column {field.name!r} is null")
@@ -293,7 +310,7 @@ def _column(file: Path | str, table: pa.Table, field: pa.Field) -> np.ndarray:
     if pa.types.is_integer(field.type):
         if not pa.types.is_integer(kind):
             raise TracksError(f"{file}: column {field.name!r} must hold integers, found {kind}")
-        return column.to_numpy().astype(np.int64, copy=False)
+        return column.to_numpy().astype(np.int64)
     if not (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
         raise TracksError(f"{file}: column {field.name!r} must hold numbers, found {kind}")
-    return column.to_numpy().astype(float, copy=False)  # a view on the table where it already is
+    return column.to_numpy().astype(float)

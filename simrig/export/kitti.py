@@ -89,8 +89,9 @@ def write(data: ExportInput, out: Path) -> None:
             dimensions, location = np.full((len(rows), 3), -1.0), np.full((len(rows), 3), -1000.0)
             rotation, alpha = np.full(len(rows), -10.0), np.full(len(rows), -10.0)
         lines = []
+        boxes = truth.boxes2d_in(rows, c)
         for k, r in enumerate(rows):
-            b = truth.boxes2d[r, c]
+            b = boxes[k]
             if data.ignored[r, c]:
                 lines.append(f"{truth.frame[r]} -1 DontCare -1 -1 -10 {b[0]:.17g} {b[1]:.17g} {b[2]:.17g} {b[3]:.17g} "
                              "-1 -1 -1 -1000 -1000 -1000 -10\n")

@@ -65,7 +65,7 @@ def write(data: ExportInput, out: Path) -> None:
             folder = gt_root / f"{BENCHMARK}-{SPLIT}" / name
             (folder / "gt").mkdir(parents=True)
             (folder / "gt" / "gt.txt").write_text(
-                _lines(truth.frame[g], truth.actor_id[g], truth.boxes2d[g, c], (~keeps_match).astype(float), classes,
+                _lines(truth.frame[g], truth.actor_id[g], truth.boxes2d_in(g, c), (~keeps_match).astype(float), classes,
                        1))
             (folder / "seqinfo.ini").write_text(
                 f"[Sequence]\nname={name}\nseqLength={len(truth.frames)}\nframeRate={frame_rate:g}\n"

@@ -163,7 +163,7 @@ def log_run(folder: Path | str, *, tracker: str | None = None, save: Path | str 
                 recording.log(f"cameras/{camera}/image", rr.EncodedImage(path=images / camera / f"{frame:06d}.png"))
             seen = g[truth.in_view[g, c]]
             recording.log(f"cameras/{camera}/ground_truth", _boxes2d(
-                rr, truth.boxes2d[seen, c], _colours(truth.actor_id[seen], identity_colour),
+                rr, truth.boxes2d_in(seen, c), _colours(truth.actor_id[seen], identity_colour),
                 [str(a) for a in truth.actor_id[seen]]))
             k = d[det["camera"][d] == camera]
             k_colours = np.array([CLUTTER_COLOUR if o < 0 else identity_colour(o) for o in det_owner[k]]).reshape(-1, 3)

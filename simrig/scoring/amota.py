@@ -94,16 +94,15 @@ def level_values(c: ClearCounts3D) -> dict[str, float]:
 def amota_family(seq: BevSequence) -> AmotaResult:
     """The AMOTA family of one class; all NaN when the class has no ground truth."""
     thresholds = score_thresholds(seq)
-    cache: dict[float, tuple[Accumulation, ClearCounts3D]] = {}
+    cache: dict[float, ClearCounts3D] = {}  # counts only: a long sequence's matches at 40 levels are large
     levels = []
     for recall, threshold in zip(RECALL_LEVELS, thresholds, strict=True):
         if np.isnan(threshold):
             levels.append(LevelResult(float(recall), float("nan"), None))
             continue
         if threshold not in cache:
-            result = accumulate(seq, float(threshold))
-            cache[threshold] = (result, clear_counts(seq, result))
-        levels.append(LevelResult(float(recall), float(threshold), cache[threshold][1]))
+            cache[threshold] = clear_counts(seq, accumulate(seq, float(threshold)))
+        levels.append(LevelResult(float(recall), float(threshold), cache[threshold]))
     names = ("AMOTA", "AMOTP", "ATVE", "MOTAR", "MOTA", "MOTP", "RECALL", "TVE",
              "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN")
     metrics = dict.fromkeys(names, float("nan"))
@@ -131,7 +130,7 @@ def amota_family(seq: BevSequence) -> AmotaResult:
     metrics.update({name: values[best][name] for name in
                     ("MOTAR", "MOTA", "MOTP", "RECALL", "TVE", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN")})
     best_threshold = reached[best].threshold
-    return AmotaResult(metrics, tuple(levels), cache[best_threshold][0], best_threshold)
+    return AmotaResult(metrics, tuple(levels), accumulate(seq, best_threshold), best_threshold)
 
 
 def combine_classes(per_class: dict[str, dict[str, float]], names: tuple[str, ...] | None = None

@@ -135,7 +135,6 @@ def events_3d(seq: BevSequence, best: Accumulation | None) -> ClearEvents:
 def _score_2d(truth: GroundTruth, rows2d, lookback: int, camera: str | None,
               config: EvaluationConfig) -> tuple[dict, pa.Table]:
     parts, errors = [], []
-    miss = truth.miss_causes
     cameras = truth.rig.camera_names
     scored = cameras if camera is None else (camera,)
     rules = ignore_rules(truth, config)
@@ -149,7 +148,7 @@ def _score_2d(truth: GroundTruth, rows2d, lookback: int, camera: str | None,
                 counts[unit.name] = unit.count(seq)
         parts.append((seq.camera, seq.label, counts))
         c = cameras.index(seq.camera)
-        attributor = Attributor(truth, miss[:, c], lookback)
+        attributor = Attributor(truth, truth.miss_causes(c), lookback)
         errors.append(attributor.tag(seq.label, seq.camera, "2d", events))
         if len(seq.ignored_misses):
             errors.append(attributor.tag_ignored(seq.label, seq.camera, seq.ignored_misses, rules[:, c]))
@@ -158,7 +157,7 @@ def _score_2d(truth: GroundTruth, rows2d, lookback: int, camera: str | None,
         values = combine(UNITS_2D, selected)
         return {name: values[name] for name in METRICS_2D}
 
-    columns = [cameras.index(name) for name in scored]
+    columns = slice(None) if scored == cameras else [cameras.index(name) for name in scored]  # a view for all
     in_view, scored_rules = truth.in_view[:, columns], rules[:, columns]
     delivered = in_view & truth.detected[:, columns] & (scored_rules == 0)
 

@@ -21,13 +21,17 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 
 from ..causes import CAUSE_NAMES, Cause
+from ..dataset.arrow_columns import shared_strings, string_codes
 from ..dataset.evaluation import rule_names
 from ..dataset.ground_truth import GroundTruth
 from .clear import ClearEvents
 
 IGNORED = "ignored"
+KINDS = ("FN", "IDS", "FRAG")
+"""The kinds of error, in reporting order."""
 IGNORED_KIND = "IGN"
 """Kind of an errors row for an ignored box left untracked: not an error, listed so a user sees what was not
 scored and why."""
@@ -93,9 +97,9 @@ class Attributor:
         bits of this camera."""
         rows = self.truth.rows_of(misses[:, 0], misses[:, 1])
         n = len(rows)
-        causes = [[f"{IGNORED}_{name}" for name in rule_names(int(rule))]
-                  + ([] if mask == 0 or not self.truth.causes_known else cause_names(int(mask)))
-                  for rule, mask in zip(rules[rows], self.masks[rows], strict=True)]
+        masks = self.masks[rows] if self.truth.causes_known else np.zeros(n, dtype=np.int64)
+        causes = name_lists(np.column_stack([rules[rows], masks]), lambda rule, mask: (
+            [f"{IGNORED}_{name}" for name in rule_names(rule)] + ([] if mask == 0 else cause_names(mask))))
         return pa.table({
             "dimension": ["2d"] * n, "kind": [IGNORED_KIND] * n, "frame": misses[:, 0].astype(np.int32),
             "camera": [camera] * n, "class": [label] * n, "actor_id": misses[:, 1].astype(np.int64),
@@ -127,9 +131,21 @@ def cause_name_lists(masks: np.ndarray) -> pa.ListArray:
     >>> cause_name_lists(np.array([0, int(Cause.FAR), 0])).to_pylist()
     [['none'], ['far'], ['none']]
     """
-    distinct, inverse = np.unique(np.asarray(masks, dtype=np.int64), return_inverse=True)
-    names = pa.array([cause_names(int(mask)) for mask in distinct], type=pa.list_(pa.string()))
-    return names.take(pa.array(inverse.reshape(-1)))
+    return name_lists(np.asarray(masks).reshape(-1, 1), cause_names)
+
+
+def name_lists(keys: np.ndarray, names) -> pa.ListArray:
+    """The list<string> column of ``names(*key)`` for each row of ``keys`` ``(n, k)`` (integers), each list
+    built once per distinct row (an errors table has a handful of distinct ones in 100,000 rows: no Python list
+    per row).
+
+    >>> name_lists(np.array([[1, 0], [2, 3], [1, 0]]), lambda a, b: [str(a)] * b or ["-"]).to_pylist()
+    [['-'], ['2', '2', '2'], ['-']]
+    """
+    keys = np.asarray(keys, dtype=np.int64)
+    distinct, inverse = np.unique(keys, axis=0, return_inverse=True)
+    lists = pa.array([names(*map(int, key)) for key in distinct], type=pa.list_(pa.string()))
+    return lists.take(pa.array(inverse.reshape(-1), type=pa.int64()))
 
 
 def cause_names(mask: int) -> list[str]:
@@ -149,24 +165,28 @@ def cause_names(mask: int) -> list[str]:
 def errors_by_cause(errors: pa.Table) -> dict[str, dict[str, dict[str, int]]]:
     """Per dimension, per tag: how many FN, IDS and FRAG carry it (an error with two tags counts under both),
     and ``total`` (each error once); last, ``ignored``: under FN, the ignored boxes left untracked (not
-    errors, not in ``total``)."""
+    errors, not in ``total``). Counted on the table's codes (no Python object per row or tag)."""
     out: dict[str, dict[str, dict[str, int]]] = {}
-    dims = errors.column("dimension").to_pylist()
-    kinds = errors.column("kind").to_pylist()
-    causes = errors.column("causes").to_pylist()
-    for dimension in sorted(set(dims)):
-        table = {cause: dict.fromkeys(("FN", "IDS", "FRAG"), 0) for cause in (*ATTRIBUTION_CAUSES, "total")}
-        ignored = 0
-        for dim, kind, tags in zip(dims, kinds, causes, strict=True):
-            if dim != dimension:
-                continue
-            if kind == IGNORED_KIND:
-                ignored += 1
-                continue
-            table["total"][kind] += 1
-            for tag in tags:
-                table[tag][kind] += 1
-        out[dimension] = {cause: row for cause, row in table.items() if any(row.values()) or cause == "total"}
+    dimension = shared_strings(errors.column("dimension"))
+    kind = string_codes(errors.column("kind"), {name: i for i, name in enumerate((*KINDS, IGNORED_KIND))},
+                        "errors table: kind")
+    counted = kind < len(KINDS)  # not an ignored box
+    causes = errors.column("causes").combine_chunks()
+    tag_row = pc.list_parent_indices(causes).to_numpy()
+    of_counted = counted[tag_row]
+    tag = string_codes(pc.list_flatten(causes).filter(pa.array(of_counted)),
+                       {name: i for i, name in enumerate(ATTRIBUTION_CAUSES)}, "errors table: cause")
+    tag_row = tag_row[of_counted]
+    for name in sorted(set(dimension.tolist())):
+        mine = dimension == name
+        counts = np.zeros((len(ATTRIBUTION_CAUSES) + 1, len(KINDS)), dtype=np.int64)  # the tags, then total
+        tagged = mine[tag_row]
+        np.add.at(counts, (tag[tagged], kind[tag_row[tagged]]), 1)
+        counts[-1] = np.bincount(kind[mine & counted], minlength=len(KINDS))
+        table = {cause: dict(zip(KINDS, row.tolist(), strict=True))
+                 for cause, row in zip((*ATTRIBUTION_CAUSES, "total"), counts, strict=True)}
+        out[name] = {cause: row for cause, row in table.items() if any(row.values()) or cause == "total"}
+        ignored = int(np.count_nonzero(mine & ~counted))
         if ignored:
-            out[dimension][IGNORED] = {"FN": ignored, "IDS": 0, "FRAG": 0}
+            out[name][IGNORED] = {"FN": ignored, "IDS": 0, "FRAG": 0}
     return out

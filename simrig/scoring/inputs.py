@@ -22,7 +22,7 @@ from simrig.dataset.tracks_file import TrackRows
 from simrig.scenarios.evaluation_schema import NUSCENES_CLASS_RANGE_M
 
 from ..dataset.evaluation import KEEPS_MATCHES
-from ..dataset.ground_truth import GroundTruth
+from ..dataset.ground_truth import GroundTruth, per_label
 from ..types import ActorClass
 from .bev import BevSequence, bev_sequence
 from .distractors import split_distractors
@@ -69,12 +69,12 @@ def camera_sequences(truth: GroundTruth, tracks2d: TrackRows, cameras: tuple[str
 
 def _sequence(truth: GroundTruth, tracks2d: TrackRows, camera: str, c: int, label: str, g: np.ndarray,
               t: np.ndarray) -> Sequence:
-    return sequence_from_rows(camera, label, truth.frames, truth.frame[g], truth.actor_id[g], truth.boxes2d[g, c],
+    return sequence_from_rows(camera, label, truth.frames, truth.frame[g], truth.actor_id[g], truth.boxes2d_in(g, c),
                               tracks2d.frame[t], tracks2d.track_id[t], tracks2d.boxes[t])
 
 
 def _in_range(truth: GroundTruth, frame: np.ndarray, label: np.ndarray, boxes: np.ndarray) -> np.ndarray:
-    limit = np.array([CLASS_RANGE_M[ActorClass(name)] for name in label]) if len(label) else np.zeros(0)
+    limit = per_label(label, lambda name: CLASS_RANGE_M[ActorClass(name)])
     return truth.distance_from_ego(frame, boxes[:, :2]) < limit
 
 

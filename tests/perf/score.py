@@ -99,7 +99,7 @@ def trackeval_2d(truth, tracks):
             gt_ids, gt_dense = np.unique(truth.actor_id[g], return_inverse=True)
             tr_ids, tr_dense = np.unique(tracks.track_id[t], return_inverse=True)
             gs, ts = frame_slices(truth.frame[g], truth.frames), frame_slices(tracks.frame[t], truth.frames)
-            gt_boxes, tr_boxes = truth.boxes2d[g, c], tracks.boxes[t]
+            gt_boxes, tr_boxes = truth.boxes2d_in(g, c), tracks.boxes[t]
             data = {"gt_ids": [gt_dense[a:b] for a, b in gs], "tracker_ids": [tr_dense[a:b] for a, b in ts],
                     "similarity_scores": [_BaseDataset._calculate_box_ious(gt_boxes[a:b], tr_boxes[c0:c1],
                                                                           box_format="x0y0x1y1")
