@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
+from gated_trackers import GATE, WAITING, add_tickets
 
 from simrig.search import load_space, run_search
 from simrig.search.fragments import FOLDER
@@ -60,42 +61,69 @@ def _without_seconds(raw: bytes) -> dict:
     return document
 
 
-def _start(space: Path, out: Path, cache: Path) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "simrig.cli", "search", str(space), "--out", str(out),
-                             "--cache", str(cache), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+TRACKER = "gated_trackers:GatedSaga"  # saga, stepping only as far as the test's tickets allow (tests/gated_trackers.py)
 
 
-def _interrupt_after(process: subprocess.Popen, out: Path, count: int, sig: int) -> tuple[int, str]:
-    deadline = time.monotonic() + 300
-    while len(_fragments(out)) < count and process.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.02)
-    process.send_signal(sig)
-    _, error = process.communicate(timeout=120)
-    return process.returncode, error.decode()
+def _start(space: Path, out: Path, cache: Path, gate: Path | None) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parent)}
+    env.pop(GATE, None)
+    if gate is not None:
+        env[GATE] = str(gate)
+    return subprocess.Popen([sys.executable, "-m", "simrig.cli", "search", str(space), "--tracker", TRACKER,
+                             "--out", str(out), "--cache", str(cache), "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+
+
+def _run_and_interrupt(space: Path, out: Path, cache: Path, gate: Path, evaluations: int, sig: int
+                       ) -> tuple[int, str, dict[str, bytes]]:
+    """Start the search, let it finish ``evaluations`` more evaluations, and send ``sig`` once it is waiting
+    for the next (evidence on disk, not a guess at its speed); its exit code, stderr and the fragments it left
+    at the moment of the signal."""
+    (gate / WAITING).unlink(missing_ok=True)
+    add_tickets(gate, evaluations)
+    process = _start(space, out, cache, gate)
+    try:
+        deadline = time.monotonic() + 300
+        while not (gate / WAITING).exists():
+            assert process.poll() is None, process.communicate()
+            assert time.monotonic() < deadline, "the search never reached its next evaluation within 5 minutes"
+            time.sleep(0.02)
+        before_signal = _fragments(out)
+        process.send_signal(sig)
+        _, error = process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+    return process.returncode, error.decode(), before_signal
 
 
 def test_a_search_interrupted_by_sigkill_and_sigint_resumes_without_repeating_or_losing_evaluations(tmp_path):
     space = tmp_path / "tiny.toml"
     space.write_text(TINY, encoding="utf-8")
     cache = tmp_path / "cache"  # shared: the interrupted search finds the reference's datasets (same bytes)
-    reference = run_search(load_space(space), out=tmp_path / "reference", cache=cache)
+    reference = run_search(load_space(space, tracker=TRACKER), out=tmp_path / "reference", cache=cache)
     expected = _fragments(tmp_path / "reference")
     assert len(expected) == 4 + 4 + 1 and reference.evaluated_now == 9
 
-    out = tmp_path / "interrupted"
-    code, _ = _interrupt_after(_start(space, out, cache), out, 2, signal.SIGKILL)
+    out, gate = tmp_path / "interrupted", tmp_path / "gate"
+    code, _, before_kill = _run_and_interrupt(space, out, cache, gate, 2, signal.SIGKILL)
     assert code == -signal.SIGKILL
     after_kill = _fragments(out)
-    assert 2 <= len(after_kill) < 9 and not (out / "results.parquet").exists()
+    assert sorted(after_kill) == sorted(before_kill) == ["evaluations/tpe/00000.json", "evaluations/tpe/00001.json"]
+    assert not (out / "results.parquet").exists()
 
-    code, error = _interrupt_after(_start(space, out, cache), out, len(after_kill) + 2, signal.SIGINT)
+    code, error, before_int = _run_and_interrupt(space, out, cache, gate, 2, signal.SIGINT)
     assert code == 130 and "run the same command again to resume" in error
     after_int = _fragments(out)
+    assert after_int == before_int  # the interrupt finished nothing more and left nothing half-written
     assert {k: v for k, v in after_int.items() if k in after_kill} == after_kill  # nothing run twice
-    assert len(after_int) < 9 and not (out / "report.md").exists()
+    assert sorted(after_int) == [*after_kill, "evaluations/tpe/00002.json", "evaluations/tpe/00003.json"]
+    assert not (out / "report.md").exists()
 
-    finished = subprocess.run([sys.executable, "-m", "simrig.cli", "search", str(space), "--out", str(out),
-                               "--cache", str(cache), "--quiet"], capture_output=True, text=True, timeout=300)
+    finished = subprocess.run([sys.executable, "-m", "simrig.cli", "search", str(space), "--tracker", TRACKER,
+                               "--out", str(out), "--cache", str(cache), "--quiet"], capture_output=True, text=True,
+                              timeout=300, env={**os.environ, "PYTHONPATH": str(Path(__file__).parent)})
     assert finished.returncode == 0, finished.stderr
     assert f"{9 - len(after_int)} evaluations run now" in finished.stdout
     final = _fragments(out)
@@ -154,3 +182,17 @@ def test_the_shrunk_worst_case_test_fails_on_the_weak_tracker_and_passes_on_saga
     saga = subprocess.run(command, capture_output=True, text=True, timeout=300, cwd=tmp_path,
                           env=os.environ | {"SIMRIG_TRACKER": "saga", "SIMRIG_TRACKER_PARAMS": "{}"})
     assert saga.returncode == 0, saga.stdout
+
+
+def test_a_3d_failure_metric_for_a_2d_tracker_is_one_line_naming_key_and_file(tmp_path, capsys):
+    # The catalog's occlusion_gaps fails on 3d_IDS; with sort (2D only) every evaluation was NaN and the search
+    # silently reported "0 of N failing".
+    from simrig.cli import main
+
+    space = tmp_path / "tiny.toml"
+    space.write_text(TINY.replace('direction = "minimize"', 'direction = "minimize"\nfailure = { metric = "3d_IDS", '
+                                                              'at_least = 1 }'))
+    assert main(["search", str(space), "--tracker", "sort", "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and f"{space}: objective.failure.metric '3d_IDS' is a 3D metric" in error
+    assert "tracker 'sort' reports no 3D tracks" in error and not (tmp_path / "out" / "report.md").exists()

@@ -40,6 +40,14 @@ def test_shrinking_reaches_the_known_minimal_case_and_every_kept_step_still_fail
     assert [d for d, kept in seen if kept] == result.kept
 
 
+def test_no_scenario_is_evaluated_twice():
+    # The last pass meets again the reductions rejected since the last kept change: the same scenario on the
+    # same seed gives the same verdict, so it is not evaluated again (a log once showed "frames = 9" twice).
+    tried = []
+    shrink(_scenario(), lambda s: tried.append(s.model_dump_json()) or _fails(s), budget=500)
+    assert len(tried) == len(set(tried)) > 20
+
+
 def test_the_budget_bounds_the_evaluations():
     calls = []
     result = shrink(_scenario(), lambda s: calls.append(s) or _fails(s), budget=7)

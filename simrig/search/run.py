@@ -163,7 +163,24 @@ def evaluate(space: SearchSpace, stream: str, index: int, candidate: Candidate, 
     else:
         per_seed = list(pool.map(run_seed, *zip(*arguments, strict=True)))
     metrics = {name: tuple(values[name] for values in per_seed) for name in METRIC_COLUMNS}
+    _check_reported(space, metrics)
     return Evaluation(stream, index, _plain(candidate), tuple(seeds), metrics, time.perf_counter() - started)
+
+
+def _check_reported(space: SearchSpace, metrics: dict[str, tuple[float, ...]]) -> None:
+    """Refuse, in one line naming the key and the space file, an objective or failure metric of 3D tracking
+    for a tracker that reports no 3D tracks (every 3D metric undefined on every seed): it would be NaN in every
+    evaluation and no case could ever fail."""
+    if not all(math.isnan(v) for name, values in metrics.items() if name.startswith("3d_") for v in values):
+        return
+    objective = space.config.objective
+    keys = [("objective.metric", objective.metric)]
+    keys += [("objective.failure.metric", objective.failure_metric)] if objective.failure is not None else []
+    for key, metric in keys:
+        if metric.startswith("3d_"):
+            raise SearchError(f"{space.path}: {key} {metric!r} is a 3D metric, and tracker {space.tracker!r} reports "
+                              "no 3D tracks; a 2D tracker is scored with 2d_* metrics (e.g. 2d_IDSW, 2d_HOTA): "
+                              "copy the space file and change the key")
 
 
 def _plain(candidate: Candidate) -> dict:

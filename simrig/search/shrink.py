@@ -98,9 +98,10 @@ def shrink(scenario: Scenario, still_fails: Callable[[Scenario], bool], *, budge
     calls of ``still_fails``. ``on_step(description, kept)`` is told about every candidate tried."""
     result = Shrunk(scenario)
     rejected: set[str] = set()
+    seen: set[str] = set()
     retried = False
     while result.evaluations < budget:
-        if _step(result, still_fails, rejected, budget, on_step):
+        if _step(result, still_fails, rejected, seen, budget, on_step):
             retried = False
         elif rejected and not retried:  # a last pass that tries everything again: nothing left to keep
             rejected.clear()
@@ -110,8 +111,10 @@ def shrink(scenario: Scenario, still_fails: Callable[[Scenario], bool], *, budge
     return result
 
 
-def _step(result: Shrunk, still_fails, rejected: set[str], budget: int, on_step) -> bool:
-    """Try the reductions of ``result.scenario`` in order; keep the first that still fails (True)."""
+def _step(result: Shrunk, still_fails, rejected: set[str], seen: set[str], budget: int, on_step) -> bool:
+    """Try the reductions of ``result.scenario`` in order; keep the first that still fails (True). A candidate
+    equal to one tried before (``seen``: the same scenario, so the same verdict on the same seed — the last
+    pass meets the reductions rejected since the last kept change again) is not evaluated twice."""
     for description, make in _reductions(result.scenario):
         if result.evaluations >= budget:
             return False
@@ -123,6 +126,10 @@ def _step(result: Shrunk, still_fails, rejected: set[str], budget: int, on_step)
             continue
         if candidate.frames < _last_window_frame(candidate) + 1:
             continue
+        key = candidate.model_dump_json()
+        if key in seen:
+            continue
+        seen.add(key)
         result.evaluations += 1
         kept = still_fails(candidate)
         if on_step is not None:
