@@ -290,6 +290,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _seed_list(text: str) -> list[int]:
+    try:
+        seeds = [int(part) for part in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seeds separated by commas (0,1), got {text!r}") from None
+    if any(seed < 0 for seed in seeds):
+        raise argparse.ArgumentTypeError(f"seeds are ≥ 0, got {text!r}")
+    return seeds
+
+
 def _names(text: str) -> list[str]:
     """An argparse type for a comma-separated list of names."""
     names = [name.strip() for name in text.split(",") if name.strip()]
@@ -340,7 +350,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.explain:
         from .explain.bench import explain_bench
 
-        path = explain_bench(result.out, samples=args.explain_samples, engine=args.engine, workers=args.workers,
+        path = explain_bench(result.out, samples=args.explain_samples, seeds=args.explain_seeds, engine=args.engine,
+                             workers=args.workers,
                              address=args.address, progress=not args.quiet)
         print(f"explain   {path}: what each cause costs every tracker on the base cells")
     print(f"report    simrig report {result.out}")
@@ -498,6 +509,8 @@ def build_parser() -> argparse.ArgumentParser:
                             "cause costs' section)")
     bench.add_argument("--explain-samples", type=_int_at_least(2), default=None, metavar="N",
                        help="permutations --explain samples (default: exact up to 7 cause groups, else 12)")
+    bench.add_argument("--explain-seeds", type=_seed_list, default=None, metavar="A,B,...",
+                       help="explain only the base cells of these seeds (default: every seed of the suite)")
     _trust_argument(bench, "the suite file")
     bench.set_defaults(run=_cmd_bench)
 

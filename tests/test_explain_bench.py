@@ -70,6 +70,29 @@ def test_the_report_section_says_what_each_cause_costs_each_tracker(bench):
         assert f"`{tracker}` loses most of its HOTA to {worst['cause'].replace('_', ' ')} ({worst['share']:+.3f}" \
             in section
     assert section.startswith("## What each cause costs")
+    ordered = "\n".join(cause_costs_section(bench.out, "tinyexplain", ["sort", "saga"]))  # the suite's order
+    assert ordered.index("### sort") < ordered.index("### saga")
+
+
+def test_the_section_means_count_an_absent_group_as_zero_and_sum_scheduled_windows_per_kind(tmp_path):
+    import pyarrow as pa
+
+    from simrig.explain.bench import SCHEMA
+
+    def row(cell, cause, share, actual, perfect):
+        return {"scenario": cell, "seed": 0, "cell": cell, "tracker": "t", "metric": "HOTA", "cause": cause,
+                "share": share, "ci95": None, "actual": actual, "perfect": perfect, "mode": "exact"}
+
+    rows = [row("a", "occlusion", 0.1, 0.5, 0.7), row("a", "occlude#0", 0.06, 0.5, 0.7),
+            row("a", "occlude#1", 0.04, 0.5, 0.7), row("b", "occlusion", 0.3, 0.4, 0.7)]
+    table = pa.Table.from_pylist(rows, schema=SCHEMA.with_metadata({"command": "simrig bench x --explain"}))
+    pq.write_table(table, tmp_path / "explain.parquet")
+    section = "\n".join(cause_costs_section(tmp_path, "x"))
+    # occlusion: (0.1 + 0.3) / 2; the two windows of cell a are one kind, absent from b: (0.06 + 0.04 + 0) / 2;
+    # together the mean gap ((0.7 - 0.5) + (0.7 - 0.4)) / 2 = 0.25
+    assert "| occlusion | +0.200 |" in section and "| occlude (scheduled) | +0.050 |" in section
+    assert "| actual | 0.450 |" in section and "(+0.200 of a 0.250 gap)" in section
+    assert "Produced by `simrig bench x --explain`." in section
 
 
 def test_a_bench_without_explanation_says_how_to_get_one(tmp_path):
@@ -77,11 +100,54 @@ def test_a_bench_without_explanation_says_how_to_get_one(tmp_path):
     assert "Not computed for this bench: `simrig bench tinyexplain --explain`" in section
 
 
+def test_a_cell_explained_with_the_other_trackers_equals_each_tracker_explained_alone(bench, tmp_path):
+    # The bench runs each (cell, coalition) once for every tracker that needs it; the shares must be those of
+    # explaining each tracker on its own (simrig explain's game).
+    import json
+
+    from simrig.scenarios.schema import scenario_from_record
+
+    from simrig.dataset import Dataset
+    from simrig.explain.api import choose_metrics, play
+    from simrig.sensor.groups import present_groups
+
+    rows = pq.read_table(bench.out / "explain.parquet").to_pandas()
+    cache = json.loads((bench.out / "bench.json").read_text())["cache"]
+    for tracker, in_3d in (("saga", True), ("sort", False)):
+        mine = rows[rows["tracker"] == tracker]
+        dataset = Dataset.open(f"{cache}/{mine['cell'].iloc[0]}")
+        players = present_groups(scenario_from_record(dataset.scenario), len(dataset.rig.cameras), scored_in_3d=in_3d)
+        chosen = choose_metrics(None, in_3d)
+        alone = play(dataset, {"tracker": tracker, "params": {}, "camera": None}, players, chosen, 2,
+                     tmp_path / tracker, workers=1).metrics(chosen)
+        for metric, values in alone.items():
+            shares = mine[mine["metric"] == metric].set_index("cause")["share"]
+            assert shares.to_dict() == pytest.approx(values["shares"], abs=1e-12)
+            assert len(shares) == len(players) >= 5
+
+
 @pytest.mark.slow
 def test_the_bench_report_has_the_section_and_keeps_its_table(bench, tmp_path):
     text = write_report(bench.out, out=tmp_path / "report").read_text()
     assert "## What each cause costs" in text and "`saga` loses most of its HOTA to" in text
     assert (tmp_path / "report" / "explain.parquet").is_file()  # the report folder can be made again
+
+
+def test_explaining_only_some_seeds(bench, tmp_path, capsys):
+    import shutil
+
+    copy = tmp_path / "bench"
+    shutil.copytree(bench.out, copy)
+    explain_bench(copy, samples=2, workers=1, seeds=[0])  # the cache is warm: only bookkeeping runs
+    assert set(pq.read_table(copy / "explain.parquet").column("seed").to_pylist()) == {0}
+    assert "(1 cell: 1 scenario × seed 0)" in "\n".join(cause_costs_section(copy, "tinyexplain"))
+    from simrig.explain import ExplainError
+
+    with pytest.raises(ExplainError, match=r"--explain-seeds: 5 not a seed of this bench \(its seeds: 0\)"):
+        explain_bench(copy, seeds=[5])
+    with pytest.raises(SystemExit):
+        main(["bench", "tinyexplain", "--explain", "--explain-seeds", "a"])
+    assert "--explain-seeds: expected seeds separated by commas" in capsys.readouterr().err
 
 
 def test_explaining_an_unfinished_bench_is_one_line(tmp_path, capsys):

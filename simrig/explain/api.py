@@ -36,7 +36,7 @@ from simrig.scoring.results import METRICS_2D, METRICS_3D
 from simrig.sensor.groups import all_groups, present_groups
 
 from ..benchmark.engines import local_map, machine_workers, ray_map
-from .coalition import ERROR_KINDS, CoalitionResult, CoalitionTask, evaluate_coalition
+from .coalition import ERROR_KINDS, CoalitionResult, CoalitionTask, TrackerRun, evaluate_coalition
 from .shapley import Coalition, all_coalitions, exact_shares, prefixes, sample_orders, sampled_shares
 from .waterfall import waterfall
 
@@ -141,13 +141,23 @@ class Game:
         return out
 
 
-def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[str, tuple[str, str]],
-         samples: int | None, scratch: Path, *, engine: str = "local", workers: int | None = None,
-         address: str | None = None, verdicts: bool = False, progress: bool = False) -> Game:
-    """Run the coalitions the Shapley values of ``players`` need on ``dataset`` with the tracker of ``record``
-    (counterfactual datasets cached in ``scratch``) and compute them: exact when ``samples`` is None and there
-    are at most :data:`EXACT_LIMIT` players, else from ``samples`` (default :data:`DEFAULT_SAMPLES`) sampled
-    permutations. ``verdicts``: also run each single removal and keep the error keys of those and the actual."""
+@dataclass(frozen=True)
+class GamePlan:
+    """The coalitions a game needs (``needed``, smallest first) and those whose error keys are kept for the
+    verdicts; ``orders`` the sampled permutations (None when exact)."""
+
+    players: tuple[str, ...]
+    exact: bool
+    orders: list[tuple[str, ...]] | None
+    needed: tuple[Coalition, ...]
+    keep_errors: frozenset[Coalition]
+
+
+def plan_game(dataset: Dataset, players: tuple[str, ...], samples: int | None, verdicts: bool = False) -> GamePlan:
+    """The coalitions the Shapley values of ``players`` need: all 2^k when ``samples`` is None and there are at
+    most :data:`EXACT_LIMIT` players, else the prefixes of ``samples`` (default :data:`DEFAULT_SAMPLES`)
+    permutations drawn from the dataset's seed (the same for every tracker of one dataset). ``verdicts``: also
+    each single removal, and the error keys of those and of the actual run."""
     if samples is not None and samples < 2:
         raise ExplainError(f"--samples: at least 2 permutations are needed for an interval, got {samples}")
     exact = samples is None and len(players) <= EXACT_LIMIT
@@ -155,18 +165,39 @@ def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[
     singles = {frozenset({p}) for p in players} if verdicts else set()
     needed = set(all_coalitions(players)) if exact else prefixes(orders) | singles
     needed |= {frozenset(), frozenset(players)}
-    keep_errors = singles | {frozenset()} if verdicts else set()
-    tasks = [CoalitionTask(str(dataset.path), record["tracker"], tuple(sorted(record["params"].items())),
-                           record["camera"], tuple(sorted(c)), tuple(chosen.values()), c in keep_errors, str(scratch))
-             for c in sorted(needed, key=lambda c: (len(c), sorted(c)))]
-    results = {frozenset(result.removed): result for result in _run(tasks, engine, workers, address, progress)}
+    keep_errors = frozenset(singles | {frozenset()}) if verdicts else frozenset()
+    return GamePlan(players, exact, orders, tuple(sorted(needed, key=lambda c: (len(c), sorted(c)))), keep_errors)
+
+
+def settle(plan: GamePlan, results: dict[Coalition, CoalitionResult]) -> Game:
+    """The game's shares from the results of every coalition of ``plan``."""
     values = {c: r.values for c, r in results.items()}
-    if exact:
-        shares, half = exact_shares(players, values) if players else {}, None
+    if plan.exact:
+        shares, half = exact_shares(plan.players, values) if plan.players else {}, None
     else:
-        sampled = sampled_shares(players, orders, values)
+        sampled = sampled_shares(plan.players, plan.orders, values)
         shares, half = sampled.shares, sampled.half_width
-    return Game(players, exact, orders, results, shares, half)
+    return Game(plan.players, plan.exact, plan.orders, results, shares, half)
+
+
+def tracker_run(record: dict, chosen: dict[str, tuple[str, str]], errors: bool) -> TrackerRun:
+    """What a coalition task needs to rebuild, run and score the tracker of ``record`` (a run's
+    ``tracker.json``: tracker, params, camera)."""
+    return TrackerRun(record["tracker"], tuple(sorted(record["params"].items())), record["camera"],
+                      tuple(chosen.values()), errors)
+
+
+def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[str, tuple[str, str]],
+         samples: int | None, scratch: Path, *, engine: str = "local", workers: int | None = None,
+         address: str | None = None, verdicts: bool = False, progress: bool = False) -> Game:
+    """Run the coalitions of :func:`plan_game` on ``dataset`` with the tracker of ``record`` (counterfactual
+    datasets cached in ``scratch``) and compute the Shapley values (:func:`settle`)."""
+    plan = plan_game(dataset, players, samples, verdicts)
+    tasks = [CoalitionTask(str(dataset.path), tuple(sorted(c)), str(scratch),
+                           (tracker_run(record, chosen, c in plan.keep_errors),)) for c in plan.needed]
+    results = {frozenset(task.removed): result for task, (result,) in run_tasks(tasks, engine, workers, address,
+                                                                                 progress)}
+    return settle(plan, results)
 
 
 def _players(causes: list[str] | None, known: tuple[str, ...], present: tuple[str, ...],
@@ -243,19 +274,20 @@ def choose_metrics(names: list[str] | None, has_3d: bool) -> dict[str, tuple[str
     return chosen
 
 
-def _run(tasks: list[CoalitionTask], engine: str, workers: int | None, address: str | None,
-         progress: bool = False) -> list[CoalitionResult]:
-    """Every coalition's counterfactual run, on the chosen engine; ``progress``: a bar on stderr."""
+def run_tasks(tasks: list[CoalitionTask], engine: str, workers: int | None, address: str | None,
+              progress: bool = False) -> list[tuple[CoalitionTask, tuple[CoalitionResult, ...]]]:
+    """Every coalition task with its runs' results, on the chosen engine, in the order they finish;
+    ``progress``: a bar on stderr."""
     from tqdm import tqdm
 
     if engine not in ("local", "ray"):
         raise ExplainError(f"--engine {engine!r}: choose local or ray")
     if engine == "ray":
-        finished = (result for _, result in ray_map(evaluate_coalition, tasks, workers, address))
+        finished = ray_map(evaluate_coalition, tasks, workers, address)
     else:
         workers = min(workers or machine_workers(), len(tasks))
-        finished = ((evaluate_coalition(task) for task in tasks) if workers <= 1
-                    else (result for _, result in local_map(evaluate_coalition, tasks, workers)))
+        finished = (((task, evaluate_coalition(task)) for task in tasks) if workers <= 1
+                    else local_map(evaluate_coalition, tasks, workers))
     return list(tqdm(finished, total=len(tasks), desc="explain", unit="run", disable=not progress))
 
 

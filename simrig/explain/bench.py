@@ -6,11 +6,12 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
+from itertools import groupby
 from pathlib import Path
 
 import pyarrow as pa
 import pyarrow.parquet as pq
-from tqdm import tqdm
 
 from simrig.dataset import Dataset
 from simrig.scenarios.schema import scenario_from_record
@@ -19,7 +20,8 @@ from simrig.sensor.groups import present_groups
 from ..benchmark.api import BENCH_FILE
 from ..benchmark.results import RESULTS
 from ..benchmark.suite import TrackerEntry
-from .api import ExplainError, choose_metrics, play
+from .api import ExplainError, choose_metrics, plan_game, run_tasks, settle, tracker_run
+from .coalition import CoalitionTask, TrackerRun
 
 EXPLAIN_TABLE = "explain.parquet"
 EXPLAIN_CACHE = "explain-cache"
@@ -34,10 +36,12 @@ half-width of its 95 % interval (null when exact)."""
 
 
 def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[str] | None = None,
-                  engine: str = "local", workers: int | None = None, address: str | None = None,
-                  progress: bool = False) -> Path:
-    """Explain every tracker on every base cell of the finished bench folder ``out``; writes and returns
-    ``out/explain.parquet``. Counterfactual datasets are cached in ``out/explain-cache/CELL``."""
+                  seeds: list[int] | None = None, engine: str = "local", workers: int | None = None,
+                  address: str | None = None, progress: bool = False) -> Path:
+    """Explain every tracker on every base cell of the finished bench folder ``out`` (only those of ``seeds``
+    when given: each cell costs about 2k+2 counterfactual sensor runs and as many runs of every tracker);
+    writes and returns ``out/explain.parquet``. Counterfactual datasets are cached in
+    ``out/explain-cache/CELL``."""
     out = Path(out)
     try:
         description = json.loads((out / BENCH_FILE).read_text(encoding="utf-8"))
@@ -49,16 +53,41 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
     base = pq.read_table(out / RESULTS, columns=["scenario", "seed", "sweep", "cell", "tracker", "scored"])
     pairs = sorted({(r["scenario"], r["seed"], r["cell"], r["tracker"], r["scored"])
                     for r in base.to_pylist() if r["sweep"] == ""})
-    rows = []
-    for scenario_name, seed, cell, tracker, scored in tqdm(pairs, desc="explain", unit="run", disable=not progress):
-        entry = entries[tracker]
-        record = {"tracker": entry["tracker"], "params": entry.get("params") or {}, "camera": entry.get("camera")}
+    if seeds is not None:
+        known = sorted({pair[1] for pair in pairs})
+        unknown = sorted(set(seeds) - set(known))
+        if unknown:
+            raise ExplainError(f"--explain-seeds: {', '.join(map(str, unknown))} not a seed of this bench (its seeds: "
+                               f"{', '.join(map(str, known))})")
+        pairs = [pair for pair in pairs if pair[1] in seeds]
+    games = []  # (scenario, seed, cell, tracker, chosen metrics, plan) of every explained pair
+    members: dict[tuple[str, frozenset], list[int]] = {}  # (dataset, coalition) → the games that need it
+    tasks: list[CoalitionTask] = []
+    for (scenario_name, seed, cell), cell_pairs in groupby(pairs, key=lambda pair: pair[:3]):
         dataset = Dataset.open(Path(description["cache"]) / cell)
         scenario = scenario_from_record(dataset.scenario)
-        players = present_groups(scenario, len(dataset.rig.cameras), scored_in_3d=scored == "3d")
-        chosen = choose_metrics(metrics, scored == "3d")
-        game = play(dataset, record, players, chosen, samples, out / EXPLAIN_CACHE / cell, engine=engine,
-                    workers=workers, address=address)
+        runs: dict[frozenset, list[TrackerRun]] = {}
+        for *_, tracker, scored in cell_pairs:
+            entry = entries[tracker]
+            record = {"tracker": entry["tracker"], "params": entry.get("params") or {}, "camera": entry.get("camera")}
+            players = present_groups(scenario, len(dataset.rig.cameras), scored_in_3d=scored == "3d")
+            chosen = choose_metrics(metrics, scored == "3d")
+            plan = plan_game(dataset, players, samples)
+            for coalition in plan.needed:
+                runs.setdefault(coalition, []).append(tracker_run(record, chosen, errors=False))
+                members.setdefault((str(dataset.path), coalition), []).append(len(games))
+            games.append((scenario_name, seed, cell, tracker, chosen, plan))
+        # one task per (cell, coalition): the sensor reruns once for every tracker that needs it
+        tasks += [CoalitionTask(str(dataset.path), tuple(sorted(c)), str(out / EXPLAIN_CACHE / cell), tuple(r))
+                  for c, r in sorted(runs.items(), key=lambda item: (len(item[0]), sorted(item[0])))]
+    outcomes: list[dict] = [{} for _ in games]
+    for task, results in run_tasks(tasks, engine, workers, address, progress):
+        coalition = frozenset(task.removed)
+        for index, result in zip(members[(task.dataset, coalition)], results, strict=True):
+            outcomes[index][coalition] = result
+    rows = []
+    for (scenario_name, seed, cell, tracker, chosen, plan), outcome in zip(games, outcomes, strict=True):
+        game = settle(plan, outcome)
         mode = "exact" if game.exact else "sampled"
         for metric, values in game.metrics(chosen).items():
             for cause, share in values["shares"].items():
@@ -66,7 +95,10 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
                              "metric": metric, "cause": cause, "share": share,
                              "ci95": values.get("ci95", {}).get(cause), "actual": values["actual"],
                              "perfect": values["perfect"], "mode": mode})
-    table = pa.Table.from_pylist(rows, schema=SCHEMA)
+    command = ["simrig", "bench", str(description["suite"]), "--out", str(out), "--explain"]
+    command += ["--explain-samples", str(samples)] if samples is not None else []
+    command += ["--explain-seeds", ",".join(map(str, seeds))] if seeds is not None else []
+    table = pa.Table.from_pylist(rows, schema=SCHEMA.with_metadata({"command": shlex.join(command)}))
     path = out / EXPLAIN_TABLE
     partial = out / f".{EXPLAIN_TABLE}.partial-{os.getpid()}"
     pq.write_table(table, partial)

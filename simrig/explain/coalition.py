@@ -31,23 +31,33 @@ ErrorKey = tuple[str, str, int, int, str]
 
 
 @dataclass(frozen=True)
-class CoalitionTask:
-    """What a worker needs: the run's dataset folder, the tracker record, the removed groups, the metrics
-    (``(dimension, name)`` pairs), whether to return the error keys, and the scratch folder."""
+class TrackerRun:
+    """One tracker to run and score on a coalition's dataset: its record (name, parameters, camera), the
+    metrics (``(dimension, name)`` pairs) and whether to return the error keys."""
 
-    dataset: str
     tracker: str
     params: tuple[tuple[str, object], ...]
     camera: str | None
-    removed: tuple[str, ...]
     metrics: tuple[tuple[str, str], ...]
     errors: bool
+
+
+@dataclass(frozen=True)
+class CoalitionTask:
+    """What a worker needs: the run's dataset folder, the removed groups, the scratch folder, and the trackers
+    to run on the counterfactual (one for ``simrig explain``; every tracker of a bench cell that needs this
+    coalition for ``simrig bench --explain``, so the sensor reruns once for all of them)."""
+
+    dataset: str
+    removed: tuple[str, ...]
     scratch: str
+    runs: tuple[TrackerRun, ...]
 
 
 @dataclass(frozen=True)
 class CoalitionResult:
-    """The metric values ``(M,)`` (NaN where undefined) and, when asked, the error keys of the run."""
+    """The metric values ``(M,)`` (NaN where undefined) of one tracker and, when asked, the error keys of
+    its run."""
 
     removed: tuple[str, ...]
     values: np.ndarray
@@ -96,12 +106,15 @@ def error_keys(errors) -> frozenset[ErrorKey]:
                          strict=True))
 
 
-def evaluate_coalition(task: CoalitionTask) -> CoalitionResult:
-    """Run one coalition (importable by name: the pool and Ray workers call it)."""
+def evaluate_coalition(task: CoalitionTask) -> tuple[CoalitionResult, ...]:
+    """Run one coalition: its counterfactual dataset once, then each of ``task.runs`` on it, in order
+    (importable by name: the pool and Ray workers call it)."""
     source = Dataset.open(task.dataset)
     dataset = counterfactual_dataset(source, task.removed, Path(task.scratch))
-    tracking = run_tracker(dataset, task.tracker, None, dict(task.params))
-    report = score(dataset, tracking.tracks, camera=task.camera)
-    values = np.array([metric_value(report, dimension, name) for dimension, name in task.metrics])
-    return CoalitionResult(task.removed, values, error_keys(report.errors) if task.errors else None)
-
+    results = []
+    for run in task.runs:
+        tracking = run_tracker(dataset, run.tracker, None, dict(run.params))
+        report = score(dataset, tracking.tracks, camera=run.camera)
+        values = np.array([metric_value(report, dimension, name) for dimension, name in run.metrics])
+        results.append(CoalitionResult(task.removed, values, error_keys(report.errors) if run.errors else None))
+    return tuple(results)
