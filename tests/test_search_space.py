@@ -47,7 +47,7 @@ def _write(tmp_path: Path, text: str) -> Path:
 
 def test_the_catalog_space_loads_and_sets_every_dimension():
     space = load_space("occlusion_gaps")
-    assert space.config.objective.failure_metric == "3d_IDS"
+    assert space.config.objective.failure_metric == "2d_IDSW"  # every tracker, 2D or 3D, reports it
     candidate = {"perturbations.0.frames.start": 4, "perturbations.0.frames.length": 6,
                  "perturbations.0.nearest": 2, "perturbations.1.frames.start": 30,
                  "perturbations.1.frames.length": 8, "perturbations.1.probability": 0.25}
