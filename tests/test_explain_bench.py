@@ -157,3 +157,69 @@ def test_explaining_an_unfinished_bench_is_one_line(tmp_path, capsys):
         explain_bench(tmp_path)
     assert main(["bench", "no_such_suite", "--explain", "--out", str(tmp_path / "x")]) == 2
     assert capsys.readouterr().err.count("\n") == 1
+
+
+def test_a_tracker_that_times_out_in_the_bench_is_left_out_and_the_others_are_explained(tmp_path, monkeypatch,
+                                                                                           capsys):
+    # Issue 23's hanging tracker: the bench records its timeout; --explain used to run it again on every
+    # counterfactual and stopped the whole explanation at its first timeout.
+    from pathlib import Path
+
+    monkeypatch.syspath_prepend(str(Path(__file__).parent))
+    monkeypatch.setenv("PYTHONPATH", str(Path(__file__).parent))  # for spawned workers
+    (tmp_path / "tiny_scenario.toml").write_text(SCENARIO)
+    (tmp_path / "hang.toml").write_text(
+        'name = "hang"\nscenarios = ["tiny_scenario.toml"]\nseeds = [0]\nframes = 8\nframe_time_limit_s = 2\n'
+        '[[trackers]]\ntracker = "saga"\n[[trackers]]\ntracker = "bench_trackers:HangsOnFrame3"\n')
+    out = tmp_path / "bench"
+    assert main(["bench", str(tmp_path / "hang.toml"), "--out", str(out), "--workers", "1", "--quiet", "--trust-file",
+                 "--explain", "--explain-samples", "2"]) == 0
+    printed = capsys.readouterr().out
+    assert "explain   not explained: bench_trackers:HangsOnFrame3 on cell " in printed
+    assert "it failed in the bench: timeout: tracker 'bench_trackers:HangsOnFrame3': frame 3: step() did not" \
+        in printed
+    rows = pq.read_table(out / "explain.parquet").to_pandas()
+    assert set(rows["tracker"]) == {"saga"} and len(rows) > 0
+    section = "\n".join(cause_costs_section(out, "hang"))
+    assert "Not explained (left out of the means below):" in section
+    assert "- `bench_trackers:HangsOnFrame3` on cell `" in section and "### saga" in section
+
+
+def test_a_tracker_failing_on_one_counterfactual_is_left_out_of_the_bench_explanation(bench, tmp_path, monkeypatch):
+    import shutil
+
+    from simrig.explain import coalition
+    from simrig.pipeline.guard import TrackerFault
+
+    real = coalition.run_tracker
+
+    def sort_fails_on_counterfactuals(dataset, name, out, params, **kwargs):
+        if name == "sort" and "/explain-cache/" in str(dataset.path):  # counterfactuals only
+            raise TrackerFault("tracker 'sort': frame 4: step() raised ValueError: planted")
+        return real(dataset, name, out, params, **kwargs)
+
+    monkeypatch.setattr(coalition, "run_tracker", sort_fails_on_counterfactuals)
+    copy = tmp_path / "bench"
+    shutil.copytree(bench.out, copy)
+    explain_bench(copy, samples=2, workers=1)  # in this process: the patched tracker runs
+    table = pq.read_table(copy / "explain.parquet")
+    assert set(table.column("tracker").to_pylist()) == {"saga"}  # saga's game is whole, sort's is not
+    from simrig.explain.bench import not_explained
+
+    (entry,) = not_explained(table)
+    assert entry["tracker"] == "sort" and entry["reason"].startswith("on the counterfactual without ")
+    assert entry["reason"].endswith(": tracker 'sort': frame 4: step() raised ValueError: planted")
+
+
+def test_simrig_explain_names_the_counterfactual_its_tracker_failed_on(tmp_path):
+    import numpy as np
+
+    from simrig.explain.api import failed_coalition
+    from simrig.explain.coalition import CoalitionResult
+
+    ok = CoalitionResult((), np.zeros(2), None)
+    results = {frozenset(): ok, frozenset({"reid", "clutter"}): CoalitionResult(("clutter", "reid"), np.full(2, np.nan),
+                                                                                None, "tracker 't': frame 2: boom"),
+               frozenset({"occlusion"}): CoalitionResult(("occlusion",), np.full(2, np.nan), None, "tracker 't': x")}
+    assert failed_coalition({frozenset(): ok}) is None
+    assert failed_coalition(results) == "on the counterfactual without occlusion: tracker 't': x"  # smallest first

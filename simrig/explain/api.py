@@ -29,6 +29,7 @@ import pyarrow.parquet as pq
 from simrig.dataset import Dataset
 from simrig.dataset.manifest import write_json_atomic
 from simrig.errors import SimrigError
+from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
 from simrig.pipeline.run import DATASET_DIR, REPORT, SCORES_DIR, TRACKER_RECORD, TRACKS_DIR, write_text_atomic
 from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.scenarios.schema import scenario_from_record
@@ -180,11 +181,12 @@ def settle(plan: GamePlan, results: dict[Coalition, CoalitionResult]) -> Game:
     return Game(plan.players, plan.exact, plan.orders, results, shares, half)
 
 
-def tracker_run(record: dict, chosen: dict[str, tuple[str, str]], errors: bool) -> TrackerRun:
+def tracker_run(record: dict, chosen: dict[str, tuple[str, str]], errors: bool,
+                frame_time_limit_s: float | None = FRAME_TIME_LIMIT_S) -> TrackerRun:
     """What a coalition task needs to rebuild, run and score the tracker of ``record`` (a run's
-    ``tracker.json``: tracker, params, camera)."""
+    ``tracker.json``: tracker, params, camera), each of its calls limited to ``frame_time_limit_s`` [s]."""
     return TrackerRun(record["tracker"], tuple(sorted(record["params"].items())), record["camera"],
-                      tuple(chosen.values()), errors)
+                      tuple(chosen.values()), errors, frame_time_limit_s)
 
 
 def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[str, tuple[str, str]],
@@ -197,7 +199,20 @@ def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[
                            (tracker_run(record, chosen, c in plan.keep_errors),)) for c in plan.needed]
     results = {frozenset(task.removed): result for task, (result,) in run_tasks(tasks, engine, workers, address,
                                                                                  progress)}
+    failed = failed_coalition(results)
+    if failed is not None:
+        raise ExplainError(failed)
     return settle(plan, results)
+
+
+def failed_coalition(results: dict[Coalition, CoalitionResult]) -> str | None:
+    """Why a game cannot be settled — the first (smallest) coalition its tracker failed on, named by the
+    groups removed, with the failure — or None when every coalition ran."""
+    failed = sorted((c for c, r in results.items() if r.failure), key=lambda c: (len(c), sorted(c)))
+    if not failed:
+        return None
+    removed = ", ".join(sorted(failed[0])) or "nothing (the actual sensor)"
+    return f"on the counterfactual without {removed}: {results[failed[0]].failure}"
 
 
 def _players(causes: list[str] | None, known: tuple[str, ...], present: tuple[str, ...],

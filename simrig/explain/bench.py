@@ -14,13 +14,14 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from simrig.dataset import Dataset
+from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
 from simrig.scenarios.schema import scenario_from_record
 from simrig.sensor.groups import present_groups
 
 from ..benchmark.api import BENCH_FILE
 from ..benchmark.results import RESULTS
 from ..benchmark.suite import TrackerEntry
-from .api import ExplainError, choose_metrics, plan_game, run_tasks, settle, tracker_run
+from .api import ExplainError, choose_metrics, failed_coalition, plan_game, run_tasks, settle, tracker_run
 from .coalition import CoalitionTask, TrackerRun
 
 EXPLAIN_TABLE = "explain.parquet"
@@ -33,6 +34,14 @@ SCHEMA = pa.schema([
 ])
 """One row per (base cell, tracker, metric, cause): the cause's share of (perfect − actual); ``ci95`` the
 half-width of its 95 % interval (null when exact)."""
+NOT_EXPLAINED = "not_explained"
+"""The table's metadata key listing (JSON) the (tracker, cell, reason) left out: a tracker that failed on the
+cell in the bench, or on one of its counterfactuals (a timeout, an exception, a malformed return)."""
+
+
+def not_explained(table: pa.Table) -> list[dict]:
+    """The ``{tracker, cell, reason}`` entries an explanation table lists as left out (none for an older one)."""
+    return json.loads((table.schema.metadata or {}).get(NOT_EXPLAINED.encode(), b"[]"))
 
 
 def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[str] | None = None,
@@ -50,16 +59,23 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
     if not description.get("complete") or not (out / RESULTS).is_file():
         raise ExplainError(f"{out}: the bench did not finish; run '{description.get('command')}' again first")
     entries = {TrackerEntry.model_validate(entry).name: entry for entry in description["suite_settings"]["trackers"]}
-    base = pq.read_table(out / RESULTS, columns=["scenario", "seed", "sweep", "cell", "tracker", "scored"])
-    pairs = sorted({(r["scenario"], r["seed"], r["cell"], r["tracker"], r["scored"])
-                    for r in base.to_pylist() if r["sweep"] == ""})
+    limit = description["suite_settings"].get("frame_time_limit_s", FRAME_TIME_LIMIT_S)
+    results = pq.read_table(out / RESULTS)
+    wanted = ("scenario", "seed", "sweep", "cell", "tracker", "scored", "failure")
+    columns = [name for name in wanted if name in results.schema.names]
+    base = [r for r in results.select(columns).to_pylist() if r["sweep"] == ""]
     if seeds is not None:
-        known = sorted({pair[1] for pair in pairs})
+        known = sorted({r["seed"] for r in base})
         unknown = sorted(set(seeds) - set(known))
         if unknown:
             raise ExplainError(f"--explain-seeds: {', '.join(map(str, unknown))} not a seed of this bench (its seeds: "
                                f"{', '.join(map(str, known))})")
-        pairs = [pair for pair in pairs if pair[1] in seeds]
+        base = [r for r in base if r["seed"] in seeds]
+    pairs = sorted({(r["scenario"], r["seed"], r["cell"], r["tracker"], r["scored"]) for r in base
+                    if not r.get("failure")})
+    # a tracker that failed on a cell in the bench (a timeout) has no actual score to explain there
+    skipped = sorted({(r["tracker"], r["cell"], f"it failed in the bench: {r['failure']}") for r in base
+                      if r.get("failure")})
     games = []  # (scenario, seed, cell, tracker, chosen metrics, plan) of every explained pair
     members: dict[tuple[str, frozenset], list[int]] = {}  # (dataset, coalition) → the games that need it
     tasks: list[CoalitionTask] = []
@@ -74,7 +90,8 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
             chosen = choose_metrics(metrics, scored == "3d")
             plan = plan_game(dataset, players, samples)
             for coalition in plan.needed:
-                runs.setdefault(coalition, []).append(tracker_run(record, chosen, errors=False))
+                runs.setdefault(coalition, []).append(tracker_run(record, chosen, errors=False,
+                                                                  frame_time_limit_s=limit))
                 members.setdefault((str(dataset.path), coalition), []).append(len(games))
             games.append((scenario_name, seed, cell, tracker, chosen, plan))
         # one task per (cell, coalition): the sensor reruns once for every tracker that needs it
@@ -87,6 +104,10 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
             outcomes[index][coalition] = result
     rows = []
     for (scenario_name, seed, cell, tracker, chosen, plan), outcome in zip(games, outcomes, strict=True):
+        failed = failed_coalition(outcome)
+        if failed is not None:  # one tracker failing on one counterfactual leaves the others explained
+            skipped.append((tracker, cell, failed))
+            continue
         game = settle(plan, outcome)
         mode = "exact" if game.exact else "sampled"
         for metric, values in game.metrics(chosen).items():
@@ -98,7 +119,9 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
     command = ["simrig", "bench", str(description["suite"]), "--out", str(out), "--explain"]
     command += ["--explain-samples", str(samples)] if samples is not None else []
     command += ["--explain-seeds", ",".join(map(str, seeds))] if seeds is not None else []
-    table = pa.Table.from_pylist(rows, schema=SCHEMA.with_metadata({"command": shlex.join(command)}))
+    not_explained = [{"tracker": tracker, "cell": cell, "reason": reason} for tracker, cell, reason in sorted(skipped)]
+    table = pa.Table.from_pylist(rows, schema=SCHEMA.with_metadata({"command": shlex.join(command),
+                                                                    NOT_EXPLAINED: json.dumps(not_explained)}))
     path = out / EXPLAIN_TABLE
     partial = out / f".{EXPLAIN_TABLE}.partial-{os.getpid()}"
     pq.write_table(table, partial)

@@ -20,6 +20,7 @@ import pyarrow.compute as pc
 from simrig.dataset import Dataset
 from simrig.errors import DatasetError
 from simrig.pipeline.generate import generate
+from simrig.pipeline.guard import FRAME_TIME_LIMIT_S, TrackerFault
 from simrig.pipeline.track import run_tracker
 from simrig.scenarios.schema import scenario_from_record
 from simrig.scoring import score
@@ -33,13 +34,15 @@ ErrorKey = tuple[str, str, int, int, str]
 @dataclass(frozen=True)
 class TrackerRun:
     """One tracker to run and score on a coalition's dataset: its record (name, parameters, camera), the
-    metrics (``(dimension, name)`` pairs) and whether to return the error keys."""
+    metrics (``(dimension, name)`` pairs), whether to return the error keys, and the limit [s] on one of its
+    calls (the bench suite's ``frame_time_limit_s``; None or 0: none)."""
 
     tracker: str
     params: tuple[tuple[str, object], ...]
     camera: str | None
     metrics: tuple[tuple[str, str], ...]
     errors: bool
+    frame_time_limit_s: float | None = FRAME_TIME_LIMIT_S
 
 
 @dataclass(frozen=True)
@@ -57,11 +60,13 @@ class CoalitionTask:
 @dataclass(frozen=True)
 class CoalitionResult:
     """The metric values ``(M,)`` (NaN where undefined) of one tracker and, when asked, the error keys of
-    its run."""
+    its run; ``failure``: why the tracker has no values on this coalition (it timed out, raised, or returned
+    something that is not tracks — the message names tracker and frame), empty when it ran to the end."""
 
     removed: tuple[str, ...]
     values: np.ndarray
     errors: frozenset[ErrorKey] | None
+    failure: str = ""
 
 
 def coalition_key(removed: tuple[str, ...]) -> str:
@@ -108,12 +113,18 @@ def error_keys(errors) -> frozenset[ErrorKey]:
 
 def evaluate_coalition(task: CoalitionTask) -> tuple[CoalitionResult, ...]:
     """Run one coalition: its counterfactual dataset once, then each of ``task.runs`` on it, in order
-    (importable by name: the pool and Ray workers call it)."""
+    (importable by name: the pool and Ray workers call it). A tracker's own fault is its result's ``failure``,
+    so that one tracker failing on one counterfactual does not stop the others."""
     source = Dataset.open(task.dataset)
     dataset = counterfactual_dataset(source, task.removed, Path(task.scratch))
     results = []
     for run in task.runs:
-        tracking = run_tracker(dataset, run.tracker, None, dict(run.params))
+        try:
+            tracking = run_tracker(dataset, run.tracker, None, dict(run.params),
+                                   frame_time_limit_s=run.frame_time_limit_s)
+        except TrackerFault as error:  # the tracker's own failure on this coalition: its caller decides
+            results.append(CoalitionResult(task.removed, np.full(len(run.metrics), np.nan), None, str(error)))
+            continue
         report = score(dataset, tracking.tracks, camera=run.camera)
         values = np.array([metric_value(report, dimension, name) for dimension, name in run.metrics])
         results.append(CoalitionResult(task.removed, values, error_keys(report.errors) if run.errors else None))

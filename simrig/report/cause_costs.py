@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pyarrow.parquet as pq
 
-from ..explain.bench import EXPLAIN_TABLE
+from ..explain.bench import EXPLAIN_TABLE, not_explained
 from .markdown import table
 
 HEADLINE_METRIC = "HOTA"
@@ -25,6 +25,13 @@ def cause_costs_section(folder: Path, suite: str, order: list[str] | None = None
                         "them (`simrig explain`).", ""]
     explained = pq.read_table(path)
     command = (explained.schema.metadata or {}).get(b"command", b"").decode()
+    left_out = [f"- `{entry['tracker']}` on cell `{entry['cell']}`: {entry['reason']}"
+                for entry in not_explained(explained)]
+    if left_out:
+        left_out = ["Not explained (left out of the means below):", "", *left_out, ""]
+    if explained.num_rows == 0:
+        return lines + (left_out or ["The explanation holds no cell.", ""]) + ([f"Produced by `{command}`.", ""]
+                                                                              if command else [])
     frame = explained.to_pandas()
     # a scheduled perturbation's group is one window of one scenario (occlude#1): the bench sums each cell's
     # windows of a kind (Shapley values add up) and shows the kind
@@ -47,6 +54,7 @@ def cause_costs_section(folder: Path, suite: str, order: list[str] | None = None
               "Scheduled perturbations are summed per kind.", ""]
     if command:
         lines += [f"Produced by `{command}`.", ""]
+    lines += left_out
     summaries = []
     found = list(dict.fromkeys(frame["tracker"]))
     rank = {name: i for i, name in enumerate(order or [])}
