@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 
@@ -35,7 +36,11 @@ def waterfall(document: dict, metric: str, path: Path) -> Path:
     mode = "exact" if document["mode"] == "exact" else f"sampled, {document['samples']} permutations"
     axes.set_title(f"{metric}: {document['tracker']} on {document['scenario']} seed {document['seed']} ({mode})",
                    fontsize=9)
-    figure.text(0.01, 0.005, document["command"], fontsize=6, color="0.4")
+    # the command that made the plot, wrapped to the figure's width (about 20 characters an inch at 6 pt) and
+    # laid out below the tick labels (a plain figure.text was cut at the right edge and overlapped them)
+    width = int(figure.get_figwidth() * 20)
+    figure.supxlabel(textwrap.fill(document["command"], width, break_on_hyphens=False), fontsize=6, color="0.4",
+                     x=0.01, ha="left")
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(f".{path.name}.partial.png")
     figure.savefig(partial, dpi=110)
