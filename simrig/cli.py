@@ -138,7 +138,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
 def _cmd_view(args: argparse.Namespace) -> int:
     from simrig.figures.viewer import log_run
 
-    saved = log_run(args.run_dir, tracker=args.tracker, save=args.save)
+    saved = log_run(args.run_dir, tracker=args.tracker, save=args.save, save_option="--save")
     print(f"wrote     {saved}" if saved is not None else "logged to a rerun viewer")
     return 0
 

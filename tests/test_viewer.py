@@ -3,6 +3,7 @@ outline, ground truth, detections and tracks, the 3D view, and one timeline even
 
 import sys
 from collections import Counter
+from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
@@ -76,3 +77,17 @@ def test_a_run_folder_with_several_trackers_needs_one_named(small_scenario, tmp_
     assert main(["view", str(tmp_path / "run"), "--tracker", "saga", "--save", str(tmp_path / "v.rrd")]) == 0
     assert main(["view", str(tmp_path / "run"), "--tracker", "nope", "--save", str(tmp_path / "w.rrd")]) == 2
     assert "--tracker 'nope': no such run" in capsys.readouterr().err
+
+
+def test_a_recording_is_never_written_into_what_it_shows_or_a_system_folder(small_scenario, tmp_path, capsys):
+    # New-user trial: --save inside the run's dataset wrote a file into the input; /proc was a rerun traceback.
+    run = run_pipeline(small_scenario, tracker="sort", out=tmp_path / "run", frames=3)
+    tracks = tmp_path / "run" / "tracks" / run.label
+    for save, expected in ((tmp_path / "run" / "dataset" / "x.rrd", "is inside the input"),
+                           (tracks / "x.rrd", "is inside the input"),
+                           (Path("/proc/x.rrd"), "is in the system folder /proc")):
+        assert main(["view", str(tmp_path / "run"), "--save", str(save)]) == 2
+        error = capsys.readouterr().err
+        assert error.count("\n") == 1 and f"--save {str(save)!r} {expected}" in error, error
+        assert not save.exists()
+    assert main(["view", str(tmp_path / "run"), "--save", str(tmp_path / "run" / "view.rrd")]) == 0  # beside them

@@ -34,6 +34,7 @@ import numpy as np
 import pyarrow.compute as pc
 
 from simrig.dataset import Dataset
+from simrig.dataset.outputs import check_output_path
 from simrig.errors import SimrigError
 
 from .mosaic import CLUTTER_COLOUR, identity_colour, track_colour
@@ -101,22 +102,28 @@ def _boxes2d(rr, boxes: np.ndarray, colours: np.ndarray, labels: list[str]):
 
 
 def log_run(folder: Path | str, *, tracker: str | None = None, save: Path | str | None = None,
-            spawn: bool = True) -> Path | None:
-    """Log the run (or dataset) at ``folder`` to rerun: to the file ``save`` (an ``.rrd``), else to a viewer
+            spawn: bool = True, save_option: str = "save") -> Path | None:
+    """Log the run (or dataset) at ``folder`` to rerun: to the file ``save`` (an ``.rrd``; refused, as
+    ``save_option`` names it, inside the dataset or tracks it reads or in a system folder), else to a viewer
     spawned now (``spawn``). Returns ``save``."""
     rr = _rerun()
     if save is None and spawn and not has_display():
         raise ViewerError("no display to open the rerun viewer on (DISPLAY and WAYLAND_DISPLAY are unset): pass "
                           "--save FILE.rrd and open it with 'rerun FILE.rrd' where there is one")
     dataset_path, tracks_path, errors_path = run_parts(Path(folder), tracker)
+    if save is not None:  # before any work: not inside the dataset or tracks read, not a system folder
+        check_output_path(save, what=save_option, inputs=(dataset_path, tracks_path), folder=False)
     dataset = Dataset.open(dataset_path)
     truth = dataset.ground_truth
     rig = truth.rig
     recording = rr.RecordingStream(application_id="simrig", recording_id=f"{dataset.scenario['name']}-"
                                                                          f"seed{dataset.seed}")
     if save is not None:
-        Path(save).parent.mkdir(parents=True, exist_ok=True)
-        recording.save(str(save))
+        try:
+            Path(save).parent.mkdir(parents=True, exist_ok=True)
+            recording.save(str(save))
+        except (OSError, RuntimeError) as error:  # rerun reports a file it cannot create as a RuntimeError
+            raise ViewerError(f"{save_option} {str(save)!r}: cannot write the recording there ({error})") from None
     elif spawn:
         recording.spawn()
     images = dataset.path / "images"
