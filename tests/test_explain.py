@@ -103,6 +103,19 @@ def test_sampled_mode_states_an_interval_and_still_adds_up(run_folder):
     assert sum(entry["shares"].values()) == pytest.approx(entry["perfect"] - entry["actual"], abs=1e-9)
 
 
+def test_explaining_again_leaves_only_the_plots_of_the_metrics_it_explains(explained, tmp_path):
+    # New-user trial: a second explain with fewer metrics left the first one's waterfalls beside the new JSON.
+    import shutil
+
+    copy = tmp_path / "run"
+    shutil.copytree(run_folder_of(explained), copy)  # its counterfactual cache too: no sensor reruns
+    assert len(list((copy / "explain" / "saga").glob("waterfall-*.png"))) == 5
+    again = explain(copy, causes=["occlusion", "random_misses", "false_positives", "cross_camera"],
+                    metrics=["HOTA", "IDS"], workers=1)
+    assert sorted(p.name for p in again.out.glob("waterfall-*.png")) == ["waterfall-HOTA.png", "waterfall-IDS.png"]
+    assert sorted(again.document["metrics"]) == ["HOTA", "IDS"]
+
+
 def test_planted_occlusion_takes_the_identity_switch_and_miss_loss_of_sort(tmp_path):
     """A perfect detector but for one scheduled 20-frame occlusion of one actor: ``sort`` (max_age 1) loses
     the track and starts a new one; removing the occlusion takes ≥ 90 % of the IDS and FN loss."""

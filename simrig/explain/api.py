@@ -104,6 +104,8 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     pq.write_table(verdicts["table"], partial)
     partial.replace(out / "verdicts.parquet")
     plots = tuple(waterfall(document, name, out / f"waterfall-{_file_name(name)}.png") for name in chosen)
+    for stale in set(out.glob("waterfall-*.png")) - set(plots):  # an earlier explain's other metrics
+        stale.unlink()
     return ExplainResult(out, document, table, plots, len(game.results), time.perf_counter() - started)
 
 
