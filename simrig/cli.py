@@ -329,12 +329,30 @@ def _non_negative_float(text: str) -> float:
     return value
 
 
+def _check_explain_options(args: argparse.Namespace) -> None:
+    """``--explain-*`` options make sense only with ``--explain``, and ``--explain-seeds`` must be seeds of the
+    suite: both checked before the bench runs (not after it, minutes later)."""
+    given = [name for name, value in (("--explain-samples", args.explain_samples),
+                                      ("--explain-seeds", args.explain_seeds)) if value is not None]
+    if given and not args.explain:
+        raise SimrigError(f"{' and '.join(given)} {'needs' if len(given) == 1 else 'need'} --explain")
+    if args.explain_seeds is not None:
+        from .benchmark.suite import load_suite
+
+        suite, _ = load_suite(args.suite, trust_file=args.trust_file)
+        unknown = sorted(set(args.explain_seeds) - set(suite.seeds))
+        if unknown:
+            raise SimrigError(f"--explain-seeds: {', '.join(map(str, unknown))} not a seed of suite {suite.name!r} "
+                              f"(its seeds: {', '.join(map(str, suite.seeds))})")
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from .benchmark import run_bench
     from .benchmark.api import BenchInterrupted
 
     _output(args.out, "--out")
     _output(args.cache, "--cache")
+    _check_explain_options(args)
     try:
         result = run_bench(args.suite, engine=args.engine, workers=args.workers, out=args.out, cache=args.cache,
                            address=args.address, progress=not args.quiet, trust_file=args.trust_file)
@@ -630,7 +648,12 @@ def console() -> None:
     written). Such a process leaves with ``os._exit`` once its output is flushed: everything simrig writes is
     committed (atomically) before :func:`main` returns, so nothing is lost by skipping the interpreter's
     teardown."""
-    code = main()
+    try:
+        code = main()
+        sys.stdout.flush()
+    except BrokenPipeError:  # the reader left early (`simrig scenarios | head`): not an error of simrig's
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit's flush
+        code = 1
     scene = sys.modules.get("simrig.render.scene")
     if scene is not None and scene.offscreen_renderer.cache_info().currsize:
         sys.stdout.flush()

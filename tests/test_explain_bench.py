@@ -223,3 +223,19 @@ def test_simrig_explain_names_the_counterfactual_its_tracker_failed_on(tmp_path)
                frozenset({"occlusion"}): CoalitionResult(("occlusion",), np.full(2, np.nan), None, "tracker 't': x")}
     assert failed_coalition({frozenset(): ok}) is None
     assert failed_coalition(results) == "on the counterfactual without occlusion: tracker 't': x"  # smallest first
+
+
+def test_explain_options_are_checked_before_the_bench_runs(tmp_path, capsys):
+    # New-user trial: --explain-seeds 7 failed only after the whole bench had run; --explain-samples without
+    # --explain was ignored.
+    (tmp_path / "tiny_scenario.toml").write_text(SCENARIO)
+    (tmp_path / "tiny.toml").write_text(SUITE)
+    out = tmp_path / "bench"
+    for extra, message in ((["--explain-samples", "2"], "simrig: error: --explain-samples needs --explain\n"),
+                           (["--explain-seeds", "0", "--explain-samples", "2"],
+                            "simrig: error: --explain-samples and --explain-seeds need --explain\n"),
+                           (["--explain", "--explain-seeds", "0,7"],
+                            "simrig: error: --explain-seeds: 7 not a seed of suite 'tinyexplain' (its seeds: 0)\n")):
+        assert main(["bench", str(tmp_path / "tiny.toml"), "--out", str(out), "--quiet", *extra]) == 2
+        assert capsys.readouterr().err == message
+        assert not out.exists()  # nothing ran
