@@ -217,7 +217,7 @@ CASES = [
     ("out-in-proc", "track {ds} --out /proc/simrig", "system folder /proc"),
     # damaged datasets
     ("info-missing", "info {root}/nowhere", "does not exist"),
-    ("info-a-file", "info {root}/binary.toml", "does not exist"),
+    ("info-a-file", "info {root}/binary.toml", "is a file, not a dataset folder"),
     ("info-empty-folder", "info {root}/empty_folder", "holds no complete simrig dataset"),
     ("render-frame-outside", "render {ds} --frame 100000", "--frame: 100000 is outside"),
     ("score-deleted-table", "score {root}/ds_deleted_table {tracks}", "ground_truth (ground_truth.parquet) is missing"),

@@ -149,3 +149,21 @@ def test_a_second_tracker_reuses_the_matching_dataset_and_writes_its_own_tracks_
     assert timings["dataset_reused"] is True and timings["generation_s"] is None
 
 
+
+
+def test_a_reader_that_leaves_early_is_not_a_traceback(tmp_path):
+    # New-user trial: `simrig scenarios | head -3` ended in a BrokenPipeError traceback.
+    import subprocess
+    import sys
+
+    for command in ("scenarios", "trackers"):
+        run = subprocess.run(f"{sys.executable} -m simrig.cli {command} | head -c 5", shell=True, capture_output=True,
+                             text=True, timeout=120, cwd=tmp_path)
+        assert len(run.stdout) == 5 and "Traceback" not in run.stderr and "BrokenPipe" not in run.stderr, run.stderr
+
+
+def test_a_file_given_as_a_dataset_is_called_a_file(tmp_path, capsys):
+    (tmp_path / "manifest.json").write_text("{}")
+    assert main(["info", str(tmp_path / "manifest.json")]) == 2
+    assert capsys.readouterr().err == (f"simrig: error: {str(tmp_path / 'manifest.json')!r} is a file, not a dataset "
+                                       "folder (a dataset is the folder holding manifest.json)\n")

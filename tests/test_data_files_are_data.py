@@ -42,6 +42,7 @@ def test_hostile_suite_is_refused_and_its_command_never_runs(tmp_path, trust):
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("simrig: error: ") and "os:system" in lines[0]
     assert ("not a tracker factory" in lines[0]) if trust else ("--trust-file" in lines[0])
+    assert "--tracker" not in lines[0]  # bench has no --tracker option to suggest
     assert not target.exists()
 
 
@@ -62,7 +63,8 @@ def test_hostile_replay_file_is_refused_and_its_command_never_runs(tmp_path, sma
     assert run.returncode == 2, run.stderr
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and "os:system" in lines[0]
-    assert ("not a tracker factory" in lines[0]) if trust else ("--trust-file" in lines[0])
+    assert ("not a tracker factory" in lines[0]) if trust else ("--trust-file" in lines[0] and
+                                                                "on the command line with --tracker" in lines[0])
     assert not target.exists()
     assert not (tmp_path / "dataset").exists()  # refused before any generation
 

@@ -187,7 +187,8 @@ def tracker_runs_on(entry: TrackerEntry, scenario: Scenario) -> bool:
 def _check_trackers(suite: Suite, scenarios: dict[str, Scenario], where: str, trust_file: bool) -> None:
     for index, entry in enumerate(suite.trackers):
         try:
-            check_file_reference(entry.tracker, trusted=trust_file, where=f"{where}: trackers.{index}")
+            check_file_reference(entry.tracker, trusted=trust_file, where=f"{where}: trackers.{index}",
+                                 override=None)
         except TrackerReferenceError as error:
             raise SuiteError(str(error)) from None
         try:

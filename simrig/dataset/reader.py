@@ -103,6 +103,9 @@ class Dataset:
         """Open ``path``; a :class:`DatasetError` if it holds no complete manifest (e.g. an interrupted
         generation). ``verify`` also checks every file's SHA-256 against the manifest."""
         path = Path(path)
+        if path.exists() and not path.is_dir():
+            raise DatasetError(f"{str(path)!r} is a file, not a dataset folder (a dataset is the folder holding "
+                               f"{MANIFEST_NAME})")
         if not path.is_dir():
             raise DatasetError(f"dataset folder {str(path)!r} does not exist")
         manifest = read_manifest(path)

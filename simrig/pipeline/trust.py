@@ -34,14 +34,16 @@ def is_import_reference(spec: object) -> bool:
     return isinstance(spec, str) and ":" in spec and spec not in tracker_registry.available()
 
 
-def check_file_reference(spec: object, *, trusted: bool, where: str) -> None:
-    """Refuse a ``module:attribute`` read from a data file (``where`` names file and key) unless ``trusted``."""
+def check_file_reference(spec: object, *, trusted: bool, where: str, override: str | None = "--tracker") -> None:
+    """Refuse a ``module:attribute`` read from a data file (``where`` names file and key) unless ``trusted``;
+    ``override``: the command's option that names a tracker instead of the file (None: the command has none,
+    as ``bench``)."""
     if trusted or not is_import_reference(spec):
         return
+    instead = f" or name the tracker on the command line with {override}" if override else ""
     raise TrackerReferenceError(
         f"{where}: tracker {spec!r} is a module:attribute reference, and a data file may only name registered "
-        f"trackers (see 'simrig trackers'); to import it, pass {TRUST_FLAG} (you trust this file) or name the "
-        "tracker on the command line with --tracker"
+        f"trackers (see 'simrig trackers'); to import it, pass {TRUST_FLAG} (you trust this file){instead}"
     )
 
 
