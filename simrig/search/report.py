@@ -111,6 +111,8 @@ def write_report(space: SearchSpace, evaluations: dict[str, list[Evaluation]], f
                   for s, items in streams.items()]
     names = _names(space)
     lines += ["", f"## The best candidates of {sampler}, re-evaluated on {config.confirm_seeds} fresh seeds", "",
+              f"Ranked by their {objective.metric} during the search (on its seeds); the fresh seeds' values below "
+              "may order them differently.", "",
               "| rank | " + " | ".join(f"`{n}`" for n in names) + f" | {objective.metric} (95% CI) |",
               "|---:|" + "---|" * len(names) + "---|"]
     for rank, e in enumerate(evaluations.get(CONFIRM, []), start=1):
