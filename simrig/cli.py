@@ -373,7 +373,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         path = explain_bench(result.out, samples=args.explain_samples, seeds=args.explain_seeds, engine=args.engine,
                              workers=args.workers, address=args.address, progress=not args.quiet)
         print(f"explain   {path}: what each cause costs every tracker on the base cells")
-        for entry in not_explained(pq.read_schema(path).empty_table()):
+        for entry in not_explained(pq.read_schema(path)):
             print(f"explain   not explained: {entry['tracker']} on cell {entry['cell']}: {entry['reason']}")
     print(f"report    simrig report {result.out}")
     return 0

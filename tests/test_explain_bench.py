@@ -206,7 +206,7 @@ def test_a_tracker_failing_on_one_counterfactual_is_left_out_of_the_bench_explan
     assert set(table.column("tracker").to_pylist()) == {"saga"}  # saga's game is whole, sort's is not
     from simrig.explain.bench import not_explained
 
-    (entry,) = not_explained(table)
+    (entry,) = not_explained(table.schema)
     assert entry["tracker"] == "sort" and entry["reason"].startswith("on the counterfactual without ")
     assert entry["reason"].endswith(": tracker 'sort': frame 4: step() raised ValueError: planted")
 

@@ -39,9 +39,10 @@ NOT_EXPLAINED = "not_explained"
 cell in the bench, or on one of its counterfactuals (a timeout, an exception, a malformed return)."""
 
 
-def not_explained(table: pa.Table) -> list[dict]:
-    """The ``{tracker, cell, reason}`` entries an explanation table lists as left out (none for an older one)."""
-    return json.loads((table.schema.metadata or {}).get(NOT_EXPLAINED.encode(), b"[]"))
+def not_explained(schema: pa.Schema) -> list[dict]:
+    """The ``{tracker, cell, reason}`` entries the schema of an explanation table lists as left out (none for an
+    older one)."""
+    return json.loads((schema.metadata or {}).get(NOT_EXPLAINED.encode(), b"[]"))
 
 
 def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[str] | None = None,

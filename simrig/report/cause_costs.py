@@ -26,7 +26,7 @@ def cause_costs_section(folder: Path, suite: str, order: list[str] | None = None
     explained = pq.read_table(path)
     command = (explained.schema.metadata or {}).get(b"command", b"").decode()
     left_out = [f"- `{entry['tracker']}` on cell `{entry['cell']}`: {entry['reason']}"
-                for entry in not_explained(explained)]
+                for entry in not_explained(explained.schema)]
     if left_out:
         left_out = ["Not explained (left out of the means below):", "", *left_out, ""]
     if explained.num_rows == 0:
