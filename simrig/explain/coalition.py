@@ -24,9 +24,10 @@ from simrig.pipeline.guard import FRAME_TIME_LIMIT_S, TrackerFault
 from simrig.pipeline.track import run_tracker
 from simrig.scenarios.schema import scenario_from_record
 from simrig.scoring import score
+from simrig.scoring.attribution import KINDS
 
-ERROR_KINDS = ("FN", "IDS", "FRAG")
-"""The errors a verdict is given for."""
+ERROR_KINDS = KINDS
+"""The errors a verdict is given for: the scorer's kinds of error (FN, IDS, FRAG)."""
 ErrorKey = tuple[str, str, int, int, str]
 """(dimension, kind, ground-truth actor id, frame, camera — empty in 3D): how an error is matched across runs."""
 
