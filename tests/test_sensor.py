@@ -12,9 +12,10 @@ from simrig.geometry import camera_from_world, project_boxes
 from simrig.render.visibility import Visibility
 from simrig.rig import build_rig
 from simrig.seeding import RandomStreams
-from simrig.sensor.batch import CameraBatch, FrameContext
+from simrig.sensor.batch import FrameContext, SensorBatch
 from simrig.sensor.effects import DetectionDraw, DetectionProbability, Monocular3D
 from simrig.sensor.model import SensorModel
+from simrig.sensor.processes import GaussMarkov, TwoStateMarkov
 from simrig.types import ActorClass, EgoPose, GroundTruthFrame
 
 RIG = build_rig(RigConfig())
@@ -33,15 +34,17 @@ def _cars_ahead(distances):
 
 
 def _batch(boxes, visible_fraction=1.0):
+    """The front camera's batch alone (a rig of one camera: every array has a camera axis of length 1)."""
     n = len(boxes)
     projection = project_boxes(boxes, RIG, EGO)
-    world_from_camera = np.linalg.inv(camera_from_world(RIG, EGO))[0]
+    world_from_camera = np.linalg.inv(camera_from_world(RIG, EGO))[:1]
     context = FrameContext(0, 0.0, 0.0, np.arange(n, dtype=np.int64), np.hypot(boxes[:, 0], boxes[:, 1]))
-    return CameraBatch(
-        context=context, camera=RIG.cameras[0], camera_index=0, world_from_camera=world_from_camera,
-        classes=np.full(n, "car", dtype=object), boxes3d=boxes, boxes2d=projection.boxes[0],
-        truncation=projection.truncation[0], visible_fraction=np.full(n, visible_fraction),
-        distance=np.linalg.norm(boxes[:, :3] - world_from_camera[:3, 3], axis=1), in_view=projection.in_view[0],
+    return SensorBatch(
+        context=context, cameras=RIG.cameras[:1], world_from_camera=world_from_camera,
+        classes=np.full(n, "car", dtype=object), boxes3d=boxes, boxes2d=projection.boxes[:1],
+        truncation=projection.truncation[:1], visible_fraction=np.full((1, n), visible_fraction),
+        distance=np.linalg.norm(boxes[:, :3] - world_from_camera[:, None, :3, 3], axis=-1),
+        in_view=projection.in_view[:1],
     )
 
 
@@ -49,12 +52,12 @@ def _batch(boxes, visible_fraction=1.0):
 def test_depth_error_standard_deviation_follows_sigma_of_d(distance):
     config = Box3DNoiseConfig(depth_sigma_m=0.2, depth_sigma_per_m=0.03)
     batch = _batch(_cars_ahead(np.full(20000, distance)))
-    batch.detected = np.ones(len(batch), dtype=bool)
+    batch.detected = np.ones((1, len(batch)), dtype=bool)
     Monocular3D(RandomStreams(3), config).apply(batch)
-    camera_centre = batch.world_from_camera[:3, 3]
+    camera_centre = batch.world_from_camera[0, :3, 3]
     ray = batch.boxes3d[:, :3] - camera_centre
     unit = ray / np.linalg.norm(ray, axis=1, keepdims=True)
-    error = np.einsum("ij,ij->i", batch.det_boxes3d[:, :3] - camera_centre, unit) - np.linalg.norm(ray, axis=1)
+    error = np.einsum("ij,ij->i", batch.det_boxes3d[0, :, :3] - camera_centre, unit) - np.linalg.norm(ray, axis=1)
     expected = 0.2 + 0.03 * distance
     assert abs(error.std() / expected - 1.0) < 0.10, (error.std(), expected)
     assert abs(error.mean()) < 0.05 * expected
@@ -74,10 +77,10 @@ def test_probability_ramps_and_causes():
     config = DetectionConfig(probability=1.0, min_visible_fraction=0.1, full_visible_fraction=0.5,
                              full_range_m=60.0, max_range_m=100.0)
     batch = _batch(_cars_ahead([20.0, 20.0, 80.0]), visible_fraction=1.0)
-    batch.visible_fraction = np.array([1.0, 0.3, 1.0])
+    batch.visible_fraction = np.array([[1.0, 0.3, 1.0]])
     DetectionProbability(config).apply(batch)
-    np.testing.assert_allclose(batch.probability, [1.0, 0.5, 0.5])
-    assert batch.causes.tolist() == [0, int(Cause.OCCLUDED), int(Cause.FAR)]
+    np.testing.assert_allclose(batch.probability, [[1.0, 0.5, 0.5]])
+    assert batch.causes.tolist() == [[0, int(Cause.OCCLUDED), int(Cause.FAR)]]
 
 
 def _frame(boxes, frame=0):
@@ -162,3 +165,22 @@ def test_embeddings_are_unit_vectors_closer_to_their_identity_when_unoccluded():
         np.testing.assert_allclose(np.linalg.norm(batch.embeddings, axis=1), 1.0, atol=1e-5)
         similarity[occlusion] = float(np.mean(np.sum(batch.embeddings * identity, axis=1)))
     assert similarity[0.0] > 0.95 > similarity[0.8]
+
+
+def test_processes_kept_for_every_camera_at_once_equal_one_process_per_camera():
+    """The sensor keeps its (actor, camera) processes in one array per effect; each camera's column must
+    evolve exactly as a process of its own would, actors entering and leaving included."""
+    rng = np.random.default_rng(0)
+    phi = np.array([0.9, 0.5, 0.0])
+    frames = [np.array([1, 2, 3]), np.array([3, 1, 7]), np.array([7, 9]), np.array([9, 7, 1, 2])]
+    cameras = 4
+    joint_gauss, joint_chain = GaussMarkov(phi), TwoStateMarkov(0.3, 0.5, 0.1)
+    own_gauss = [GaussMarkov(phi) for _ in range(cameras)]
+    own_chain = [TwoStateMarkov(0.3, 0.5, 0.1) for _ in range(cameras)]
+    for ids in frames:
+        z = rng.standard_normal((len(ids), cameras, len(phi)))
+        u = rng.random((len(ids), cameras))
+        joint_z, joint_u = joint_gauss.step(ids, z), joint_chain.step(ids, u)
+        for camera in range(cameras):
+            np.testing.assert_array_equal(joint_z[:, camera], own_gauss[camera].step(ids, z[:, camera]))
+            np.testing.assert_array_equal(joint_u[:, camera], own_chain[camera].step(ids, u[:, camera]))

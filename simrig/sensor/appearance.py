@@ -22,7 +22,7 @@ import numpy as np
 from simrig.scenarios.sensor_schema import EmbeddingConfig
 
 from ..seeding import RandomStreams
-from .batch import CameraBatch
+from .batch import SensorBatch
 
 _SIDES = 3  # back, side, front
 _CALIBRATION_STREAM = 10
@@ -52,8 +52,8 @@ def roc_auc(positive: np.ndarray, negative: np.ndarray) -> float:
 
 def viewed_side(boxes3d: np.ndarray, camera_centre: np.ndarray) -> np.ndarray:
     """Which side of each box the camera sees: 0 back, 1 side, 2 front (from the bearing of the camera's ray
-    relative to the box's yaw)."""
-    ray = boxes3d[:, :2] - camera_centre[:2]
+    relative to the box's yaw); ``camera_centre`` ``(3,)``, or ``(K, 3)``: one per box."""
+    ray = boxes3d[:, :2] - camera_centre[..., :2]
     relative = np.abs((np.arctan2(ray[:, 1], ray[:, 0]) - boxes3d[:, 6] + np.pi) % (2 * np.pi) - np.pi)
     return np.where(relative < np.pi / 4, 0, np.where(relative > 3 * np.pi / 4, 2, 1))
 
@@ -162,20 +162,21 @@ class Embeddings:
             self._generators[camera_index] = self._streams.generator("sensor", _NOISE_STREAM, camera_index)
         return self._generators[camera_index]
 
-    def apply(self, batch: CameraBatch) -> None:
+    def apply(self, batch: SensorBatch) -> None:
         c = self.config
         n, d = len(batch), c.dimension
-        noise = self.rng(batch.camera_index).standard_normal((n, d)) / np.sqrt(d)
+        noise = np.stack([self.rng(index).standard_normal((n, d)) for index in range(len(batch.cameras))]) / np.sqrt(d)
         truncation = np.nan_to_num(batch.truncation, nan=1.0)
         sigma = (self.sigma + c.occlusion_sigma * (1.0 - batch.visible_fraction)
                  + c.truncation_sigma * truncation) * batch.noise_factor
         if c.distance_scale_m:
             sigma = sigma * (1.0 + batch.distance / c.distance_scale_m)
-        detected = batch.detected
-        embeddings = np.full((n, d), np.float32(np.nan), dtype=np.float32)
-        if detected.any():
-            sides = viewed_side(batch.boxes3d[detected], batch.world_from_camera[:3, 3])
-            appearance = self.appearance(batch.actor_ids[detected], batch.classes[detected], sides)
-            embeddings[detected] = (_unit(appearance + noise[detected] * sigma[detected, None]) if self.enabled
-                                    else appearance)
+        embeddings = np.full((len(batch.cameras), n, d), np.float32(np.nan), dtype=np.float32)
+        cameras, actors = np.nonzero(batch.detected)
+        if len(actors):
+            sides = viewed_side(batch.boxes3d[actors], batch.world_from_camera[cameras, :3, 3])
+            appearance = self.appearance(batch.actor_ids[actors], batch.classes[actors], sides)
+            embeddings[cameras, actors] = (
+                _unit(appearance + noise[cameras, actors] * sigma[cameras, actors, None]) if self.enabled
+                else appearance)
         batch.embeddings = embeddings

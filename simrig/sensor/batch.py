@@ -1,8 +1,9 @@
-"""The working record of one camera's detector at one frame, which every sensor effect reads and updates."""
+"""The working record of the detector at one frame, for every camera of the rig at once, which every sensor
+effect reads and updates; and one camera's share of it."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -21,25 +22,35 @@ class FrameContext:
     ego_distance: np.ndarray
 
 
-@dataclass(eq=False)
-class CameraBatch:
-    """Everything one camera's detector knows and decides at one frame, vectorised over the ``N`` actors.
+_NO_FALSE_POSITIVES: dict[str, tuple] = {"boxes2d": (0, 4), "boxes3d": (0, 9), "scores": (0,), "causes": (0,)}
 
-    Inputs (ground truth, never shown to a tracker): ``boxes3d`` ``(N, 9)`` world frame; ``boxes2d`` ``(N, 4)``
-    pixels (NaN where not in view); ``truncation``, ``visible_fraction`` (1 − occlusion; 0 where unknown or
-    hidden) and ``distance`` [m] from the camera's optical centre to the box centre; ``in_view``.
+
+@dataclass(eq=False)
+class SensorBatch:
+    """Everything the detectors of ``C`` cameras (rig order) know and decide at one frame, vectorised over
+    cameras × the ``N`` actors of the frame (every camera sees the same actor list; most are out of its view).
+
+    Inputs (ground truth, never shown to a tracker): ``classes`` ``(N,)`` and ``boxes3d`` ``(N, 9)`` world
+    frame, shared by all cameras; per camera ``world_from_camera`` ``(C, 4, 4)``; per camera and actor
+    ``boxes2d`` ``(C, N, 4)`` pixels (NaN where not in view), ``truncation``, ``visible_fraction`` (1 −
+    occlusion; 0 where unknown or hidden) and ``distance`` [m] from the camera's optical centre to the box
+    centre, ``in_view`` — each ``(C, N)``.
 
     Effects then set ``probability`` (of a detection), ``causes`` (:class:`~.causes.Cause` bit masks),
-    ``noise_factor`` and ``yaw_offset`` [rad], ``silenced`` (no output at all, not even clutter), draw
-    ``detected`` and fill the outputs of detected actors: ``det_boxes2d``, ``det_boxes3d``, ``scores``,
-    ``embeddings`` and ``labels`` (the class reported; the true class unless confused), plus the false
-    positives (``clutter``: clutter, ghosts and duplicates, each row with its ``causes``); last, each
-    detection's position in the camera's list (``detection_index``, −1 for a miss; ``clutter_index``).
+    ``noise_factor`` — each ``(C, N)`` — and per camera ``yaw_offset`` [rad] and ``silenced`` (no output at
+    all, not even clutter) ``(C,)``; draw ``detected`` and fill the outputs of detected actors:
+    ``det_boxes2d`` ``(C, N, 4)``, ``det_boxes3d`` ``(C, N, 9)``, ``scores``, ``embeddings`` ``(C, N, D)``
+    and ``labels`` (the class reported; the true class unless confused); per camera the false positives
+    (``clutter[c]``: clutter, ghosts and duplicates, each row with its ``causes``) and the ghosts it reports
+    (``ghost_ids[c]``); last, each detection's position in its camera's list (``detection_index`` ``(C, N)``,
+    −1 for a miss; ``clutter_index[c]``).
+
+    A camera's random draws come from its own stream per effect, so the numbers do not depend on how many
+    cameras are processed together.
     """
 
     context: FrameContext
-    camera: Camera
-    camera_index: int
+    cameras: tuple[Camera, ...]
     world_from_camera: np.ndarray
     classes: np.ndarray
     boxes3d: np.ndarray
@@ -48,51 +59,94 @@ class CameraBatch:
     visible_fraction: np.ndarray
     distance: np.ndarray
     in_view: np.ndarray
-    probability: np.ndarray = None
-    causes: np.ndarray = None
-    noise_factor: np.ndarray = None
-    yaw_offset: float = 0.0
-    silenced: bool = False
-    detected: np.ndarray = None
-    det_boxes2d: np.ndarray = None
-    det_boxes3d: np.ndarray = None
-    scores: np.ndarray = None
-    embeddings: np.ndarray = None
-    labels: np.ndarray = None
-    ghost_ids: np.ndarray = None
-    clutter: dict[str, np.ndarray] = field(default_factory=dict)
-    detection_index: np.ndarray = None
-    clutter_index: np.ndarray = None
 
     def __post_init__(self) -> None:
-        n = len(self.classes)
+        c, n = self.in_view.shape
         self.probability = np.where(self.in_view, 1.0, 0.0)
-        self.causes = np.zeros(n, dtype=np.int64)
-        self.noise_factor = np.ones(n)
-        self.detected = np.zeros(n, dtype=bool)
-        self.det_boxes2d = np.full((n, 4), np.nan)
-        self.det_boxes3d = np.full((n, 9), np.nan)
-        self.scores = np.full(n, np.nan)
-        self.labels = self.classes
+        self.causes = np.zeros((c, n), dtype=np.int64)
+        self.noise_factor = np.ones((c, n))
+        self.yaw_offset = np.zeros(c)
+        self.silenced = np.zeros(c, dtype=bool)
+        self.detected = np.zeros((c, n), dtype=bool)
+        self.det_boxes2d = np.full((c, n, 4), np.nan)
+        self.det_boxes3d = np.full((c, n, 9), np.nan)
+        self.scores = np.full((c, n), np.nan)
+        self.embeddings: np.ndarray | None = None
+        self.labels = np.tile(np.asarray(self.classes, dtype=object), (c, 1))
+        self.ghost_ids: list[np.ndarray] = [np.empty(0, dtype=np.int64)] * c
+        self.clutter: list[dict[str, np.ndarray]] = [{} for _ in range(c)]
+        self.detection_index = np.full((c, n), -1, dtype=np.int64)
+        self.clutter_index: list[np.ndarray] = [np.empty(0, dtype=np.int64)] * c
+        self.image_width = np.array([camera.width for camera in self.cameras], dtype=float)
+        self.image_height = np.array([camera.height for camera in self.cameras], dtype=float)
 
-    def add_false_positives(self, boxes2d: np.ndarray, boxes3d: np.ndarray, scores: np.ndarray,
+    def add_false_positives(self, camera_index: int, boxes2d: np.ndarray, boxes3d: np.ndarray, scores: np.ndarray,
                             labels: np.ndarray, embeddings: np.ndarray, cause: int) -> None:
-        """Append false positives (pixel boxes ``(K, 4)``, world boxes ``(K, 9)``, scores, labels, unit
-        embeddings ``(K, D)``) with one :class:`~simrig.causes.Cause` bit mask for all of them."""
+        """Append false positives to camera ``camera_index`` (pixel boxes ``(K, 4)``, world boxes ``(K, 9)``,
+        scores, labels, unit embeddings ``(K, D)``) with one :class:`~simrig.causes.Cause` bit mask for all."""
         k = len(scores)
         new = {"boxes2d": np.asarray(boxes2d, dtype=float).reshape(k, 4),
                "boxes3d": np.asarray(boxes3d, dtype=float).reshape(k, 9),
                "scores": np.asarray(scores, dtype=float), "labels": np.asarray(labels, dtype=object),
                "embeddings": np.asarray(embeddings, dtype=np.float32),
                "causes": np.full(k, int(cause), dtype=np.int64)}
-        if not self.clutter:
-            self.clutter = new
-            return
-        self.clutter = {key: np.concatenate([self.clutter[key], value]) for key, value in new.items()}
+        old = self.clutter[camera_index]
+        self.clutter[camera_index] = new if not old else {
+            key: np.concatenate([old[key], value]) for key, value in new.items()}
+
+    def camera(self, index: int) -> CameraDetections:
+        """Camera ``index``'s share of the batch (views, not copies)."""
+        clutter = self.clutter[index]
+        if not clutter:
+            d = 0 if self.embeddings is None else self.embeddings.shape[2]
+            clutter = {key: np.empty(shape) for key, shape in _NO_FALSE_POSITIVES.items()}
+            clutter["causes"] = clutter["causes"].astype(np.int64)
+            clutter.update(labels=np.empty(0, dtype=object), embeddings=np.empty((0, d), dtype=np.float32))
+        return CameraDetections(
+            camera=self.cameras[index], camera_index=index, world_from_camera=self.world_from_camera[index],
+            actor_ids=self.context.actor_ids, classes=self.classes,
+            in_view=self.in_view[index], probability=self.probability[index], causes=self.causes[index],
+            detected=self.detected[index], det_boxes2d=self.det_boxes2d[index], det_boxes3d=self.det_boxes3d[index],
+            scores=self.scores[index], labels=self.labels[index],
+            embeddings=None if self.embeddings is None else self.embeddings[index], clutter=clutter,
+            ghost_ids=self.ghost_ids[index], detection_index=self.detection_index[index],
+            clutter_index=self.clutter_index[index])
 
     @property
     def actor_ids(self) -> np.ndarray:
         return self.context.actor_ids
+
+    def __len__(self) -> int:
+        """The number of actors ``N``."""
+        return len(self.classes)
+
+
+@dataclass(frozen=True, eq=False)
+class CameraDetections:
+    """What one camera's detector decided at one frame (views of a :class:`SensorBatch`): the camera, its
+    index in the rig and its pose ``world_from_camera`` ``(4, 4)``; per actor
+    ``(N, …)`` the probability, causes, whether detected and the detection's outputs; the false positives
+    (``clutter``: a dict of ``boxes2d``, ``boxes3d``, ``scores``, ``labels``, ``embeddings``, ``causes``); the
+    position of each detection in the camera's list."""
+
+    camera: Camera
+    camera_index: int
+    world_from_camera: np.ndarray
+    actor_ids: np.ndarray
+    classes: np.ndarray
+    in_view: np.ndarray
+    probability: np.ndarray
+    causes: np.ndarray
+    detected: np.ndarray
+    det_boxes2d: np.ndarray
+    det_boxes3d: np.ndarray
+    scores: np.ndarray
+    labels: np.ndarray
+    embeddings: np.ndarray | None
+    clutter: dict[str, np.ndarray]
+    ghost_ids: np.ndarray
+    detection_index: np.ndarray
+    clutter_index: np.ndarray
 
     def __len__(self) -> int:
         return len(self.classes)

@@ -23,7 +23,7 @@ from ..classes import CLASS_SPECS
 from ..geometry import Projection, project_boxes
 from ..seeding import RandomStreams
 from ..types import ActorClass, EgoPose, Rig
-from .batch import CameraBatch
+from .batch import SensorBatch
 
 _WORLD_STREAM = 12
 _CAMERA_STREAM = 13
@@ -32,7 +32,7 @@ _EMBEDDING_STREAM = 14
 
 class GhostWorld:
     """The living ghosts: ``ids``, ``labels``, world ``boxes`` ``(G, 9)``, shadowed actor (−1 static) and
-    offset [m]; :meth:`advance` once per frame, :meth:`apply` per camera batch."""
+    offset [m]; :meth:`advance` once per frame, then :meth:`apply` to the cameras' batch."""
 
     def __init__(self, config: GhostConfig, class_mix: dict[str, float], rig: Rig, period_s: float,
                  embedding_dimension: int, streams: RandomStreams, *, reported: bool = True):
@@ -134,20 +134,25 @@ class GhostWorld:
             self._embeddings[ghost_id] = (vector / np.linalg.norm(vector)).astype(np.float32)
         return self._embeddings[ghost_id]
 
-    def apply(self, batch: CameraBatch) -> None:
-        """Report the ghosts this camera sees (nothing when the camera is silenced)."""
-        if batch.camera_index not in self._cameras:
-            self._cameras[batch.camera_index] = self._streams.generator("sensor", _CAMERA_STREAM, batch.camera_index)
-        rng = self._cameras[batch.camera_index]
+    def apply(self, batch: SensorBatch) -> None:
+        """Report the ghosts each camera sees (nothing from a silenced camera)."""
+        for index in range(len(batch.cameras)):
+            self.apply_camera(batch, index)
+
+    def apply_camera(self, batch: SensorBatch, index: int) -> None:
+        """Camera ``index``'s ghosts: a uniform and a score per living ghost from the camera's stream."""
+        if index not in self._cameras:
+            self._cameras[index] = self._streams.generator("sensor", _CAMERA_STREAM, index)
+        rng = self._cameras[index]
         g = len(self.ids)
         u, scores = rng.random(g), rng.beta(*self._beta(), g) if g else np.empty(0)
-        batch.ghost_ids = np.empty(0, dtype=np.int64)
-        if g == 0 or batch.silenced or not self.reported:
+        batch.ghost_ids[index] = np.empty(0, dtype=np.int64)
+        if g == 0 or batch.silenced[index] or not self.reported:
             return
-        in_view = self.projection.in_view[batch.camera_index]
+        in_view = self.projection.in_view[index]
         seen = np.nonzero(in_view & (u < self.config.probability))[0]
-        batch.ghost_ids = self.ids[seen]
-        batch.add_false_positives(self.projection.boxes[batch.camera_index, seen], self.boxes[seen], scores[seen],
+        batch.ghost_ids[index] = self.ids[seen]
+        batch.add_false_positives(index, self.projection.boxes[index, seen], self.boxes[seen], scores[seen],
                                   self.labels[seen], np.array([self.embedding(i) for i in self.ids[seen]]).reshape(
                                       len(seen), self.dimension), Cause.GHOST)
 

@@ -15,7 +15,7 @@ from ..render.visibility import Visibility
 from ..seeding import RandomStreams
 from ..types import GroundTruthFrame, Rig
 from .appearance import Embeddings
-from .batch import CameraBatch, FrameContext
+from .batch import CameraDetections, FrameContext, SensorBatch
 from .effects import (
     Box2DNoise,
     Clutter,
@@ -36,12 +36,17 @@ from .perturbations import PERTURBATION_EFFECTS, DroppedFrames, Scheduled, Sched
 
 @dataclass(frozen=True, eq=False)
 class SensorOutput:
-    """One frame of sensor output: a batch per camera (rig order), whether the frame was dropped, and the
-    scheduled perturbations active at the frame (event strings)."""
+    """One frame of sensor output: the cameras' batch, whether the frame was dropped, and the scheduled
+    perturbations active at the frame (event strings)."""
 
-    batches: tuple[CameraBatch, ...]
+    batch: SensorBatch
     dropped: bool
     events: tuple[str, ...]
+
+    @property
+    def batches(self) -> tuple[CameraDetections, ...]:
+        """Each camera's detections, in rig order."""
+        return tuple(self.batch.camera(index) for index in range(len(self.batch.cameras)))
 
 
 class SensorModel:
@@ -116,33 +121,28 @@ class SensorModel:
         visible_fraction = np.nan_to_num(1.0 - visibility.occlusion, nan=0.0)
         if self.ghosts.enabled:
             self.ghosts.advance(state.frame, ego, state.actor_ids, state.classes, np.asarray(state.boxes))
-        batches = []
-        for index, camera in enumerate(self.rig.cameras):
-            centre = world_from_camera[index, :3, 3]
-            batch = CameraBatch(
-                context=context,
-                camera=camera,
-                camera_index=index,
-                world_from_camera=world_from_camera[index],
-                classes=state.classes,
-                boxes3d=np.asarray(state.boxes),
-                boxes2d=projection.boxes[index],
-                truncation=projection.truncation[index],
-                visible_fraction=np.where(projection.in_view[index], visible_fraction[index], 0.0),
-                distance=np.linalg.norm(state.boxes[:, :3] - centre, axis=1),
-                in_view=projection.in_view[index],
-            )
-            for effect in self.effects:
-                effect.apply(batch)
-            batches.append(batch)
+        boxes = np.asarray(state.boxes)
+        batch = SensorBatch(
+            context=context,
+            cameras=self.rig.cameras,
+            world_from_camera=world_from_camera,
+            classes=state.classes,
+            boxes3d=boxes,
+            boxes2d=projection.boxes,
+            truncation=projection.truncation,
+            visible_fraction=np.where(projection.in_view, visible_fraction, 0.0),
+            distance=np.linalg.norm(boxes[:, :3] - world_from_camera[:, None, :3, 3], axis=-1),
+            in_view=projection.in_view,
+        )
+        for effect in self.effects:
+            effect.apply(batch)
         if self.cross_camera:
-            keep_best_camera(batches)
-        for batch in batches:  # each effect draws from its own per-camera stream: the loop order changes nothing
-            for effect in self.finishing:
-                effect.apply(batch)
+            keep_best_camera(batch)
+        for effect in self.finishing:
+            effect.apply(batch)
         dropped = any(drop.dropped(state.frame) for drop in self.drops)
         events = tuple(effect.describe(context) for effect in self.scheduled if effect.active(state.frame))
-        return SensorOutput(tuple(batches), dropped, events)
+        return SensorOutput(batch, dropped, events)
 
 
 class SeenUnhindered:
@@ -152,33 +152,29 @@ class SeenUnhindered:
     def __init__(self, *, occlusion: bool, truncation: bool):
         self.occlusion, self.truncation = occlusion, truncation
 
-    def apply(self, batch: CameraBatch) -> None:
+    def apply(self, batch: SensorBatch) -> None:
         if self.occlusion:
             batch.visible_fraction = np.where(batch.in_view, 1.0, batch.visible_fraction)
         if self.truncation:
             batch.truncation = np.where(batch.in_view, 0.0, batch.truncation)
 
 
-def keep_best_camera(batches: list[CameraBatch]) -> None:
+def keep_best_camera(batch: SensorBatch) -> None:
     """Counterfactual ``cross_camera``: an actor detected by several cameras stays detected only in the best
     one — largest visible fraction × (1 − truncation), then largest true pixel box, then rig order."""
-    if not batches or not len(batches[0]):
+    if not len(batch):
         return
-    detected = np.stack([batch.detected for batch in batches])  # (C, N)
-    quality = np.stack([batch.visible_fraction * (1.0 - np.nan_to_num(batch.truncation, nan=1.0))
-                        for batch in batches])
-    area = np.stack([np.nan_to_num((batch.boxes2d[:, 2] - batch.boxes2d[:, 0])
-                                   * (batch.boxes2d[:, 3] - batch.boxes2d[:, 1])) for batch in batches])
-    cameras = np.arange(len(batches))[:, None] * np.ones_like(quality)
+    detected = batch.detected  # (C, N)
+    quality = batch.visible_fraction * (1.0 - np.nan_to_num(batch.truncation, nan=1.0))
+    boxes = batch.boxes2d
+    area = np.nan_to_num((boxes[..., 2] - boxes[..., 0]) * (boxes[..., 3] - boxes[..., 1]))
+    cameras = np.arange(len(batch.cameras))[:, None] * np.ones_like(quality)
     # lexicographic best per actor among the detecting cameras: quality, area (both descending), camera index
-    order = np.lexsort((cameras, -area, -quality, ~detected), axis=0)
-    best = order[0]
-    for index, batch in enumerate(batches):
-        drop = batch.detected & (best != index)
-        if drop.any():
-            batch.detected = batch.detected & ~drop
-            batch.det_boxes2d = np.where(drop[:, None], np.nan, batch.det_boxes2d)
-            batch.det_boxes3d = np.where(drop[:, None], np.nan, batch.det_boxes3d)
-            batch.scores = np.where(drop, np.nan, batch.scores)
-            if batch.embeddings is not None:
-                batch.embeddings = np.where(drop[:, None], np.float32(np.nan), batch.embeddings)
+    best = np.lexsort((cameras, -area, -quality, ~detected), axis=0)[0]
+    drop = detected & (best != np.arange(len(batch.cameras))[:, None])
+    batch.detected = detected & ~drop
+    batch.det_boxes2d = np.where(drop[..., None], np.nan, batch.det_boxes2d)
+    batch.det_boxes3d = np.where(drop[..., None], np.nan, batch.det_boxes3d)
+    batch.scores = np.where(drop, np.nan, batch.scores)
+    if batch.embeddings is not None:
+        batch.embeddings = np.where(drop[..., None], np.float32(np.nan), batch.embeddings)

@@ -11,7 +11,7 @@ from simrig.scenarios.perturbation_schema import Blackout, Calibration, MissBurs
 from ..causes import Cause
 from ..seeding import RandomStreams
 from ..types import Rig
-from .batch import CameraBatch, FrameContext
+from .batch import FrameContext, SensorBatch
 
 
 class Scheduled:
@@ -29,14 +29,17 @@ class Scheduled:
                 f"cameras: {', '.join(rig.camera_names)}"
             )
         self.cameras = frozenset(rig.camera_names.index(name) for name in names) if names else None
+        self._camera_mask = np.array([self.cameras is None or index in self.cameras
+                                      for index in range(len(rig.cameras))])
         self._chosen: np.ndarray | None = None
 
     def active(self, frame: int) -> bool:
         return self.first <= frame <= self.last
 
-    def applies(self, batch: CameraBatch) -> bool:
-        """Whether the window covers the batch's frame and the batch's camera is affected."""
-        return self.active(batch.context.frame) and (self.cameras is None or batch.camera_index in self.cameras)
+    def applies(self, batch: SensorBatch) -> np.ndarray | None:
+        """The affected cameras ``(C, 1)`` (a mask to broadcast over actors) when the window covers the
+        batch's frame, else None."""
+        return self._camera_mask[:, None] if self.active(batch.context.frame) else None
 
     def chosen_actors(self, context: FrameContext) -> np.ndarray | None:
         """Ids of the affected actors (None: every actor); ``nearest = k`` is decided on the first frame of
@@ -51,7 +54,7 @@ class Scheduled:
             self._chosen = np.sort(context.actor_ids[order])
         return self._chosen
 
-    def actor_mask(self, batch: CameraBatch) -> np.ndarray:
+    def actor_mask(self, batch: SensorBatch) -> np.ndarray:
         chosen = self.chosen_actors(batch.context)
         return np.ones(len(batch), dtype=bool) if chosen is None else np.isin(batch.actor_ids, chosen)
 
@@ -69,10 +72,11 @@ class Scheduled:
 class ScheduledOcclusion(Scheduled):
     """``occlude``: the actors' visible fraction becomes 0 (so p becomes 0), causes occluded + scheduled."""
 
-    def apply(self, batch: CameraBatch) -> None:
-        if not self.applies(batch):
+    def apply(self, batch: SensorBatch) -> None:
+        cameras = self.applies(batch)
+        if cameras is None:
             return
-        hit = self.actor_mask(batch) & batch.in_view
+        hit = cameras & self.actor_mask(batch) & batch.in_view
         batch.visible_fraction = np.where(hit, 0.0, batch.visible_fraction)
         batch.causes |= np.where(hit, int(Cause.OCCLUDED | Cause.SCHEDULED_OCCLUSION), 0)
 
@@ -80,10 +84,11 @@ class ScheduledOcclusion(Scheduled):
 class ScheduledMisses(Scheduled):
     """``miss_burst``: p ← p · (1 − probability) for the chosen actors in view, cause scheduled_miss."""
 
-    def apply(self, batch: CameraBatch) -> None:
-        if not self.applies(batch):
+    def apply(self, batch: SensorBatch) -> None:
+        cameras = self.applies(batch)
+        if cameras is None:
             return
-        hit = self.actor_mask(batch) & batch.in_view
+        hit = cameras & self.actor_mask(batch) & batch.in_view
         batch.probability = np.where(hit, batch.probability * (1.0 - self.config.probability), batch.probability)
         batch.causes |= np.where(hit, int(Cause.SCHEDULED_MISS), 0)
 
@@ -91,12 +96,11 @@ class ScheduledMisses(Scheduled):
 class CameraBlackout(Scheduled):
     """``blackout``: the camera reports nothing, cause blackout on every actor in its view."""
 
-    def apply(self, batch: CameraBatch) -> None:
-        if not self.applies(batch):
+    def apply(self, batch: SensorBatch) -> None:
+        cameras = self.applies(batch)
+        if cameras is None:
             return
-        batch.silenced = True
-        batch.probability = np.zeros(len(batch))
-        batch.causes |= np.where(batch.in_view, int(Cause.BLACKOUT), 0)
+        silence(batch, cameras, Cause.BLACKOUT)
 
 
 class DroppedFrames(Scheduled):
@@ -112,32 +116,40 @@ class DroppedFrames(Scheduled):
             return False
         return bool(self._streams.generator("perturbations", self.index, frame).random() < self.config.probability)
 
-    def apply(self, batch: CameraBatch) -> None:
+    def apply(self, batch: SensorBatch) -> None:
         if not self.dropped(batch.context.frame):
             return
-        batch.silenced = True
-        batch.probability = np.zeros(len(batch))
-        batch.causes |= np.where(batch.in_view, int(Cause.DROPPED_FRAME), 0)
+        silence(batch, self._camera_mask[:, None], Cause.DROPPED_FRAME)
 
 
 class CalibrationError(Scheduled):
     """``calibration``: the camera's 3D estimates are lifted with a yaw offset, cause calibration."""
 
-    def apply(self, batch: CameraBatch) -> None:
-        if not self.applies(batch):
+    def apply(self, batch: SensorBatch) -> None:
+        cameras = self.applies(batch)
+        if cameras is None:
             return
-        batch.yaw_offset += np.radians(self.config.yaw_offset_deg)
-        batch.causes |= np.where(batch.in_view, int(Cause.CALIBRATION), 0)
+        batch.yaw_offset = np.where(cameras[:, 0], batch.yaw_offset + np.radians(self.config.yaw_offset_deg),
+                                    batch.yaw_offset)
+        batch.causes |= np.where(cameras & batch.in_view, int(Cause.CALIBRATION), 0)
 
 
 class IncreasedNoise(Scheduled):
     """``noise``: every noise σ of the camera multiplied by ``factor``, cause noise."""
 
-    def apply(self, batch: CameraBatch) -> None:
-        if not self.applies(batch):
+    def apply(self, batch: SensorBatch) -> None:
+        cameras = self.applies(batch)
+        if cameras is None:
             return
-        batch.noise_factor = batch.noise_factor * self.config.factor
-        batch.causes |= np.where(batch.in_view, int(Cause.NOISE), 0)
+        batch.noise_factor = np.where(cameras, batch.noise_factor * self.config.factor, batch.noise_factor)
+        batch.causes |= np.where(cameras & batch.in_view, int(Cause.NOISE), 0)
+
+
+def silence(batch: SensorBatch, cameras: np.ndarray, cause: Cause) -> None:
+    """The ``cameras`` (a ``(C, 1)`` mask) report nothing: p = 0, ``cause`` on every actor in their view."""
+    batch.silenced = batch.silenced | cameras[:, 0]
+    batch.probability = np.where(cameras, 0.0, batch.probability)
+    batch.causes |= np.where(cameras & batch.in_view, int(cause), 0)
 
 
 PERTURBATION_EFFECTS = {

@@ -24,18 +24,19 @@ def ar1_coefficient(period_s: float, correlation_time_s: float) -> float:
 
 
 class ActorState:
-    """Persistent ``(width,)`` float state per actor id (sorted ids, vectorised look-up)."""
+    """Persistent float state of shape ``shape`` per actor id (e.g. ``(C, 9)``: nine values per camera; sorted
+    ids, vectorised look-up)."""
 
-    def __init__(self, width: int):
+    def __init__(self, shape: tuple[int, ...]):
         self.ids = np.empty(0, dtype=np.int64)
-        self.values = np.empty((0, width))
+        self.values = np.empty((0, *shape))
 
     def recall(self, actor_ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(values (N, width), known (N,))`` for the frame's actors; unknown actors get zeros."""
+        """``(values (N, *shape), known (N,))`` for the frame's actors; unknown actors get zeros."""
         index = np.searchsorted(self.ids, actor_ids)
         index = np.minimum(index, max(len(self.ids) - 1, 0))
         known = (self.ids[index] == actor_ids) if len(self.ids) else np.zeros(len(actor_ids), dtype=bool)
-        values = np.zeros((len(actor_ids), self.values.shape[1]))
+        values = np.zeros((len(actor_ids), *self.values.shape[1:]))
         values[known] = self.values[index[known]]
         return values, known
 
@@ -43,22 +44,30 @@ class ActorState:
         """Remember ``values`` for exactly the frame's actors (actors no longer present are forgotten)."""
         order = np.argsort(actor_ids, kind="stable")
         self.ids = np.asarray(actor_ids, dtype=np.int64)[order]
-        self.values = np.asarray(values, dtype=float).reshape(len(actor_ids), self.values.shape[1])[order]
+        self.values = np.asarray(values, dtype=float).reshape(len(actor_ids), *self.values.shape[1:])[order]
+
+
+def _known(known: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``known`` ``(N,)`` broadcast against ``values`` ``(N, …)``."""
+    return known.reshape(-1, *([1] * (values.ndim - 1)))
 
 
 class GaussMarkov:
-    """Unit-variance AR(1) processes (``width`` per actor) with coefficient φ per column:
-    x ← φ·x + √(1 − φ²)·z for known actors, x ← z for new ones (the stationary distribution)."""
+    """Unit-variance AR(1) processes with coefficient φ per last-axis column (``width`` = len(φ) per actor, or
+    ``(…, width)`` per actor, e.g. per camera): x ← φ·x + √(1 − φ²)·z for known actors, x ← z for new ones (the
+    stationary distribution). The shape per actor is fixed by the first step."""
 
     def __init__(self, phi: np.ndarray):
         self.phi = np.asarray(phi, dtype=float)
-        self.state = ActorState(len(self.phi))
+        self.state: ActorState | None = None
 
     def step(self, actor_ids: np.ndarray, z: np.ndarray) -> np.ndarray:
-        """Advance one frame with standard normal innovations ``z`` ``(N, width)``; returns the new state."""
+        """Advance one frame with standard normal innovations ``z`` ``(N, …, width)``; returns the new state."""
+        if self.state is None:
+            self.state = ActorState(z.shape[1:])
         previous, known = self.state.recall(actor_ids)
         advanced = self.phi * previous + np.sqrt(1.0 - self.phi**2) * z
-        values = np.where(known[:, None], advanced, z)
+        values = np.where(_known(known, z), advanced, z)
         self.state.keep(actor_ids, values)
         return values
 
@@ -76,13 +85,17 @@ class TwoStateMarkov:
             self.r = min(1.0, p * self.q / (1.0 - p))
         else:
             self.q, self.r = 1.0 - p, p
-        self.state = ActorState(1)
+        self.state: ActorState | None = None
 
     def step(self, actor_ids: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """Advance one frame with uniform draws ``u`` ``(N,)``; returns the new on/off states."""
+        """Advance one frame with uniform draws ``u`` ``(N,)`` (or ``(N, …)``: several chains per actor, e.g.
+        one per camera); returns the new on/off states, shaped like ``u``. The shape per actor is fixed by the
+        first step."""
+        if self.state is None:
+            self.state = ActorState(u.shape[1:])
         previous, known = self.state.recall(actor_ids)
-        on = previous[:, 0] > 0.5
+        on = previous > 0.5
         advanced = np.where(on, u >= self.q, u < self.r)
-        values = np.where(known, advanced, u < self.p)
+        values = np.where(_known(known, u), advanced, u < self.p)
         self.state.keep(actor_ids, values.astype(float))
         return values
