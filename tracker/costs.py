@@ -86,12 +86,30 @@ def iou(tracks: np.ndarray, detections: np.ndarray, *, bev: bool = False) -> np.
     out = np.zeros((len(tracks), len(detections)))
     if out.size == 0:
         return out
-    d, radius = _footprint_bounds(tracks, detections)
-    rows, cols = np.nonzero(d < radius)
-    if len(rows):
-        inter, union, _ = _pair_overlap(tracks, detections, rows, cols, bev, hull=False)
-        out[rows, cols] = inter / union
+    rows, cols = np.nonzero(may_overlap(tracks, detections))
+    out[rows, cols] = pair_iou(tracks, detections, rows, cols, bev=bev)
     return out
+
+
+def may_overlap(tracks: np.ndarray, detections: np.ndarray) -> np.ndarray:
+    """(N, M): whether the footprints' circumcircles overlap — false pairs have IoU 0 exactly."""
+    d, radius = _footprint_bounds(tracks, detections)
+    return d < radius
+
+
+def pair_iou(tracks: np.ndarray, detections: np.ndarray, rows: np.ndarray, cols: np.ndarray, *,
+             bev: bool = False) -> np.ndarray:
+    """IoU of the pairs ``(tracks[rows[k]], detections[cols[k]])``, ``(K,)`` — the values :func:`iou` gives
+    them, for callers that need only some pairs.
+
+    >>> box = np.array([[0.0, 0.0, 0.0, 4.0, 2.0, 1.5, 0.0]])
+    >>> pair_iou(box, box + [1.0, 0, 0, 0, 0, 0, 0], np.array([0]), np.array([0]), bev=True).round(4).tolist()
+    [0.6]
+    """
+    if not len(rows):
+        return np.zeros(0)
+    inter, union, _ = _pair_overlap(tracks, detections, rows, cols, bev, hull=False)
+    return inter / union
 
 
 def overlaps(

@@ -25,7 +25,7 @@ from simrig.types import ActorClass, Box3D, Rig, SensorFrame, Track
 from . import motion
 from .assignment import UNMATCHED
 from .clock import FrameClock
-from .costs import iou
+from .costs import may_overlap, pair_iou
 from .detections import LABELS, DetectionArrays, detection_arrays
 from .life import HitsAndAge, TrackLife
 
@@ -178,7 +178,9 @@ class KalmanTracker:
         boxes = np.stack([track.kf.x[:7, 0] for track in self.tracks])
         labels = np.array([track.label for track in self.tracks])
         same_class = labels[:, None] == labels[None, :]
-        rows, cols = np.nonzero(np.triu(iou(boxes, boxes, bev=True) >= self.duplicate_iou, k=1) & same_class)
+        rows, cols = np.nonzero(np.triu(may_overlap(boxes, boxes), k=1) & same_class)  # each pair once
+        duplicate = pair_iou(boxes, boxes, rows, cols, bev=True) >= self.duplicate_iou
+        rows, cols = rows[duplicate], cols[duplicate]
         if len(rows) == 0:
             return
         rank = sorted(range(len(self.tracks)), key=lambda i: (-self.tracks[i].life.hits, self.tracks[i].track_id))
