@@ -9,6 +9,7 @@ annotator would draw around the visible part of the object inside the image.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,9 +60,16 @@ def transform_points(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 def camera_from_world(rig: Rig, ego: EgoPose) -> np.ndarray:
     """``(C, 4, 4)`` transforms taking world points to each camera's OpenCV frame, in rig order."""
-    world_from_ego = ego.world_from_ego()
-    world_from_camera = np.stack([world_from_ego @ camera.ego_from_camera() for camera in rig.cameras])
-    return np.linalg.inv(world_from_camera)
+    return np.linalg.inv(ego.world_from_ego() @ _ego_from_cameras(rig))
+
+
+@functools.lru_cache(maxsize=32)
+def _ego_from_cameras(rig: Rig) -> np.ndarray:
+    """``(C, 4, 4)``: each camera's fixed mounting (:meth:`~simrig.types.Camera.ego_from_camera`), read-only
+    (asked for per frame and per projection: computed once per rig)."""
+    out = np.stack([camera.ego_from_camera() for camera in rig.cameras])
+    out.setflags(write=False)
+    return out
 
 
 def clip_convex_polygons(
@@ -124,9 +132,12 @@ class Projection:
     in_view: np.ndarray
 
 
+@functools.lru_cache(maxsize=32)
 def _camera_parameters(rig: Rig) -> np.ndarray:
-    """``(C, 7)``: fx, fy, cx, cy [px], width, height [px], near [m] of each camera, in rig order."""
-    return np.array([[cam.fx, cam.fy, cam.cx, cam.cy, cam.width, cam.height, cam.near] for cam in rig.cameras])
+    """``(C, 7)``: fx, fy, cx, cy [px], width, height [px], near [m] of each camera, in rig order (read-only)."""
+    out = np.array([[cam.fx, cam.fy, cam.cx, cam.cy, cam.width, cam.height, cam.near] for cam in rig.cameras])
+    out.setflags(write=False)
+    return out
 
 
 def _frustum_candidates(centres: np.ndarray, radii: np.ndarray, rig: Rig) -> np.ndarray:
