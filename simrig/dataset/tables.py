@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
-from ..causes import CAUSE_BITS, CAUSE_NAMES, Cause
+from ..causes import CAUSE_BITS, CAUSE_NAMES
 from ..geometry import Projection
 from ..render.visibility import Visibility
 from ..sensor.model import SensorOutput
@@ -136,53 +136,72 @@ def frame_columns(
 
 
 def sensor_columns(frame: int, timestamp: float, sensor: SensorOutput) -> dict[str, dict]:
-    """The ``detections``, ``sensor_truth`` and ``frames`` columns of one frame of sensor output."""
-    detections = {name: [] for name in ("camera", "index", "box2d", "score", "label", "box3d", "embedding")}
-    truth = {name: [] for name in ("camera", "actor_id", "detection", "probability", "causes")}
-    for batch in sensor.batches:
-        name = batch.camera.name
-        hit = np.nonzero(batch.detection_index >= 0)[0]
-        clutter = batch.clutter
-        k = len(batch.clutter_index)
-        index = np.concatenate([batch.detection_index[hit], batch.clutter_index])
-        order = np.argsort(index, kind="stable")
-        detections["camera"].append(np.full(len(index), name, dtype=object))
-        detections["index"].append(index[order])
-        detections["box2d"].append(np.concatenate([batch.det_boxes2d[hit], clutter["boxes2d"]])[order])
-        detections["score"].append(np.concatenate([batch.scores[hit], clutter["scores"]])[order])
-        detections["label"].append(np.concatenate([batch.labels[hit], clutter["labels"]]).astype(object)[order])
-        detections["box3d"].append(np.concatenate([batch.det_boxes3d[hit], clutter["boxes3d"]])[order])
-        detections["embedding"].append(np.concatenate([batch.embeddings[hit], clutter["embeddings"]])[order])
-        n = len(batch)
-        truth["camera"].append(np.full(n + k, name, dtype=object))
-        truth["actor_id"].append(np.concatenate([batch.actor_ids, np.full(k, -1, dtype=np.int64)]))
-        truth["detection"].append(np.concatenate([batch.detection_index, batch.clutter_index]))
-        truth["probability"].append(np.concatenate([batch.probability, np.zeros(k)]))
-        truth["causes"].append(np.concatenate([batch.causes, clutter.get("causes", np.full(k, int(Cause.CLUTTER)))]))
-    joined = {key: np.concatenate(value) for key, value in detections.items()}
-    d = len(joined["index"])
-    embeddings = joined["embedding"].astype(np.float32)
-    dimension = embeddings.shape[1] if embeddings.ndim == 2 else 0
+    """The ``detections``, ``sensor_truth`` and ``frames`` columns of one frame of sensor output, for every
+    camera at once (rows by camera in rig order; detections by their index in the camera's list, truth rows
+    actors then false positives)."""
+    batch = sensor.batch
+    c, n = batch.detected.shape
+    names = np.array([camera.name for camera in batch.cameras], dtype=object)
+    false_positives = [batch.false_positives(index) for index in range(c)]
+    k = np.array([len(fp["scores"]) for fp in false_positives], dtype=np.int64)
+    fp = {key: np.concatenate([row[key] for row in false_positives]) for key in false_positives[0]}
+    clutter_camera = np.repeat(np.arange(c), k)
+    clutter_index = np.concatenate(batch.clutter_index).astype(np.int64)
+
+    # detections: detected actors and false positives, each at its camera's start + its index in the list
+    hits = batch.detection_index >= 0
+    counts = hits.sum(axis=1) + k
+    starts = np.cumsum(counts) - counts
+    d = int(counts.sum())
+    cams, actors = np.nonzero(hits)
+    at_actor = starts[cams] + batch.detection_index[cams, actors]
+    at_clutter = starts[clutter_camera] + clutter_index
+    dimension = batch.embeddings.shape[2] if batch.embeddings is not None else fp["embeddings"].shape[1]
+
+    def scatter(actor_values: np.ndarray, clutter_values: np.ndarray, dtype, width: tuple[int, ...] = ()):
+        out = np.empty((d, *width), dtype=dtype)
+        out[at_actor] = actor_values
+        out[at_clutter] = clutter_values
+        return out
+
+    box2d = scatter(batch.det_boxes2d[cams, actors], fp["boxes2d"], float, (4,))
+    box3d = scatter(batch.det_boxes3d[cams, actors], fp["boxes3d"], float, (9,))
+    embeddings = scatter(np.empty((0, dimension)) if batch.embeddings is None else batch.embeddings[cams, actors],
+                         fp["embeddings"], np.float32, (dimension,))
     detection_columns = {
         "frame": np.full(d, frame, dtype=np.int32),
-        "camera": joined["camera"],
-        "index": joined["index"].astype(np.int32),
-        **{field: joined["box2d"].reshape(d, 4)[:, i] for i, field in enumerate(BOX2D_FIELDS)},
-        "score": joined["score"],
-        "label": joined["label"],
-        **{field: joined["box3d"].reshape(d, 9)[:, i] for i, field in enumerate(BOX3D_FIELDS)},
+        "camera": names[np.repeat(np.arange(c), counts)],
+        "index": (np.arange(d) - np.repeat(starts, counts)).astype(np.int32),
+        **{field: box2d[:, i] for i, field in enumerate(BOX2D_FIELDS)},
+        "score": scatter(batch.scores[cams, actors], fp["scores"], float),
+        "label": scatter(batch.labels[cams, actors], fp["labels"], object),
+        **{field: box3d[:, i] for i, field in enumerate(BOX3D_FIELDS)},
         "embedding": pa.ListArray.from_arrays(
             pa.array(np.arange(d + 1, dtype=np.int32) * dimension), pa.array(embeddings.reshape(-1))
         ),
     }
-    rows = {key: np.concatenate(value) for key, value in truth.items()}
+
+    # sensor truth: per camera its n actors, then its false positives
+    per_camera = n + k
+    truth_starts = np.cumsum(per_camera) - per_camera
+    rows = int(per_camera.sum())
+    at_actor = (truth_starts[:, None] + np.arange(n)[None, :]).reshape(-1)
+    at_clutter = truth_starts[clutter_camera] + n + (np.arange(len(clutter_camera)) - np.repeat(np.cumsum(k) - k, k))
+
+    def truth(actor_values: np.ndarray, clutter_values, dtype):
+        out = np.empty(rows, dtype=dtype)
+        out[at_actor] = actor_values.reshape(-1)
+        out[at_clutter] = clutter_values
+        return out
+
     truth_columns = {
-        "frame": np.full(len(rows["actor_id"]), frame, dtype=np.int32),
-        "camera": rows["camera"],
-        "actor_id": rows["actor_id"],
-        "detection": rows["detection"].astype(np.int32),
-        "probability": rows["probability"],
-        "causes": cause_lists(rows["causes"]),
+        "frame": np.full(rows, frame, dtype=np.int32),
+        "camera": names[np.repeat(np.arange(c), per_camera)],
+        "actor_id": truth(np.broadcast_to(batch.actor_ids, (c, n)), -1,
+                          np.result_type(batch.actor_ids.dtype, np.int64)),
+        "detection": truth(batch.detection_index, clutter_index, np.int64).astype(np.int32),
+        "probability": truth(batch.probability, 0.0, float),
+        "causes": cause_lists(truth(batch.causes, fp["causes"], np.int64)),
     }
     frame_row = {
         "frame": np.array([frame], dtype=np.int32),
@@ -196,6 +215,7 @@ def sensor_columns(frame: int, timestamp: float, sensor: SensorOutput) -> dict[s
 def cause_lists(masks: np.ndarray) -> pa.ListArray:
     """A list<string> column from ``(R,)`` int64 bit masks, names in :data:`CAUSE_NAMES` order.
 
+    >>> from simrig.causes import Cause
     >>> cause_lists(np.array([0, int(Cause.FAR | Cause.OCCLUDED)])).to_pylist()
     [[], ['occluded', 'far']]
     """

@@ -22,9 +22,6 @@ class FrameContext:
     ego_distance: np.ndarray
 
 
-_NO_FALSE_POSITIVES: dict[str, tuple] = {"boxes2d": (0, 4), "boxes3d": (0, 9), "scores": (0,), "causes": (0,)}
-
-
 @dataclass(eq=False)
 class SensorBatch:
     """Everything the detectors of ``C`` cameras (rig order) know and decide at one frame, vectorised over
@@ -94,14 +91,19 @@ class SensorBatch:
         self.clutter[camera_index] = new if not old else {
             key: np.concatenate([old[key], value]) for key, value in new.items()}
 
+    def false_positives(self, index: int) -> dict[str, np.ndarray]:
+        """Camera ``index``'s false positives (empty arrays of the right shapes when it has none)."""
+        clutter = self.clutter[index]
+        if clutter:
+            return clutter
+        d = 0 if self.embeddings is None else self.embeddings.shape[2]
+        return {"boxes2d": np.empty((0, 4)), "boxes3d": np.empty((0, 9)), "scores": np.empty(0),
+                "labels": np.empty(0, dtype=object), "embeddings": np.empty((0, d), dtype=np.float32),
+                "causes": np.empty(0, dtype=np.int64)}
+
     def camera(self, index: int) -> CameraDetections:
         """Camera ``index``'s share of the batch (views, not copies)."""
-        clutter = self.clutter[index]
-        if not clutter:
-            d = 0 if self.embeddings is None else self.embeddings.shape[2]
-            clutter = {key: np.empty(shape) for key, shape in _NO_FALSE_POSITIVES.items()}
-            clutter["causes"] = clutter["causes"].astype(np.int64)
-            clutter.update(labels=np.empty(0, dtype=object), embeddings=np.empty((0, d), dtype=np.float32))
+        clutter = self.false_positives(index)
         return CameraDetections(
             camera=self.cameras[index], camera_index=index, world_from_camera=self.world_from_camera[index],
             actor_ids=self.context.actor_ids, classes=self.classes,
