@@ -213,19 +213,33 @@ def _clip_faces_to_image(
 
 def project_boxes(boxes: np.ndarray, rig: Rig, ego: EgoPose) -> Projection:
     """Project world-frame 3D boxes (``(N, ≥7)``, :data:`~simrig.types.BOX3D_FIELDS` order) into every camera."""
+    return project_boxes_from(boxes, rig, camera_from_world(rig, ego)[:, None])
+
+
+def project_boxes_at(boxes: np.ndarray, rig: Rig, egos: list[EgoPose], pose_of_box: np.ndarray) -> Projection:
+    """:func:`project_boxes` for boxes of several frames at once: box ``i`` seen from ego pose
+    ``egos[pose_of_box[i]]`` — the same numbers as one :func:`project_boxes` call per pose."""
+    world_from_ego = np.stack([ego.world_from_ego() for ego in egos])  # (F, 4, 4)
+    transforms = np.linalg.inv(world_from_ego[:, None] @ _ego_from_cameras(rig))  # (F, C, 4, 4)
+    return project_boxes_from(boxes, rig, np.swapaxes(transforms[pose_of_box], 0, 1))
+
+
+def project_boxes_from(boxes: np.ndarray, rig: Rig, transforms: np.ndarray) -> Projection:
+    """Project world-frame 3D boxes (``(N, ≥7)``) into every camera with ``transforms`` ``(C, N, 4, 4)`` taking
+    each box's world frame to each camera's (``(C, 1, 4, 4)``: one pose for every box)."""
     boxes = np.asarray(boxes, dtype=float)
     if boxes.ndim != 2 or boxes.shape[1] < 7:
         raise ValueError(f"boxes: expected shape (N, 9) in BOX3D_FIELDS order, got {boxes.shape}")
     n, c = len(boxes), len(rig.cameras)
-    transforms = camera_from_world(rig, ego)  # (C, 4, 4)
-    centres = transform_points(transforms[:, None], boxes[None, :, :3])  # (C, N, 3)
+    centres = transform_points(transforms, boxes[None, :, :3])  # (C, N, 3)
     radii = 0.5 * np.linalg.norm(boxes[:, 3:6], axis=1)
     camera_index, box_index = np.nonzero(_frustum_candidates(centres, radii, rig))
 
     clipped = np.full((c, n, 4), np.nan)
     unclipped = np.full((c, n, 4), np.nan)
     if len(camera_index):
-        corners = transform_points(transforms[camera_index, None], box_corners(boxes[box_index]))  # (P, 8, 3)
+        pair_transforms = transforms[camera_index, box_index if transforms.shape[1] > 1 else 0, None]  # (P, 1, 4, 4)
+        corners = transform_points(pair_transforms, box_corners(boxes[box_index]))  # (P, 8, 3)
         low, high, raw_low, raw_high = _clip_faces_to_image(corners[:, BOX_FACES], camera_index, rig)
         clipped[camera_index, box_index] = np.concatenate([low, high], axis=-1)
         unclipped[camera_index, box_index] = np.concatenate([raw_low, raw_high], axis=-1)

@@ -19,7 +19,7 @@ import pyarrow.compute as pc
 
 from ..causes import CAUSE_BITS, CAUSE_NAMES, Cause
 from ..errors import DatasetError
-from ..geometry import project_boxes
+from ..geometry import project_boxes_at
 from ..types import BOX2D_FIELDS, BOX3D_FIELDS, EgoPose, Rig
 from .arrow_columns import shared_strings, string_codes
 from .tables import SCHEMAS
@@ -338,24 +338,29 @@ def load_depth(dataset: Dataset) -> np.ndarray:
     return _read_columns(dataset, "projections", ("depth",), n, per_camera=c)["depth"].reshape(n, c)
 
 
-def project_tracks(truth: GroundTruth, tracks3d: TrackRows) -> TrackRows:
+def project_tracks(truth: GroundTruth, tracks3d: TrackRows, *, chunk_frames: int = 256) -> TrackRows:
     """2D rows of 3D tracks: each box projected into every camera at its frame's ego pose with the ground
     truth's geometry (:func:`simrig.geometry.project_boxes`: clipped to the near plane and the image), kept
-    where in view; sorted by frame, then track row, then camera."""
+    where in view; sorted by frame, then track row, then camera. Tracks at frames the ground truth lacks have
+    no 2D rows. Projects ``chunk_frames`` frames per call (bounded memory)."""
     frame, camera, index, boxes = [], [], [], []
     names = np.array(truth.rig.camera_names, dtype=object)
     starts = np.searchsorted(tracks3d.frame, truth.frames)
     stops = np.searchsorted(tracks3d.frame, truth.frames, side="right")
-    for position, (lo, hi) in enumerate(zip(starts, stops, strict=True)):
-        if hi == lo or not names.size:  # no frame's tracks, or a rig without cameras (a nuScenes import)
+    for first in range(0, len(truth.frames) if names.size else 0, chunk_frames):  # a rig without cameras: none
+        chunk = slice(first, first + chunk_frames)
+        counts = stops[chunk] - starts[chunk]
+        if not counts.sum():
             continue
-        projection = project_boxes(tracks3d.boxes[lo:hi], truth.rig, truth.egos[position])
+        rows = np.concatenate([np.arange(lo, hi) for lo, hi in zip(starts[chunk], stops[chunk], strict=True)])
+        pose = np.repeat(np.arange(len(counts)), counts)
+        projection = project_boxes_at(tracks3d.boxes[rows], truth.rig, truth.egos[chunk], pose)
         cam, box = np.nonzero(projection.in_view)
         order = np.lexsort((cam, box))  # by track row, then camera: stays sorted by frame
         cam, box = cam[order], box[order]
-        frame.append(np.full(len(box), truth.frames[position]))
+        frame.append(truth.frames[chunk][pose[box]])
         camera.append(names[cam])
-        index.append(lo + box)
+        index.append(rows[box])
         boxes.append(projection.boxes[cam, box])
     if not index:
         return TrackRows(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, object), np.zeros(0),
