@@ -61,8 +61,10 @@ def _pair_overlap(tracks: np.ndarray, detections: np.ndarray, rows: np.ndarray, 
     with ``bev``, volumes [m³] otherwise (intersection = footprint intersection × height overlap; enclosing =
     convex hull of both footprints × the union of the height ranges)."""
     corners_a, corners_b = bev_corners(tracks), bev_corners(detections)
-    poly_a, poly_b = shapely.polygons(corners_a), shapely.polygons(corners_b)
-    intersection = shapely.area(shapely.intersection(poly_a[rows], poly_b[cols]))
+    used_a, at_a = np.unique(rows, return_inverse=True)  # polygons only of the boxes in some pair
+    used_b, at_b = np.unique(cols, return_inverse=True)
+    poly_a, poly_b = shapely.polygons(corners_a[used_a]), shapely.polygons(corners_b[used_b])
+    intersection = shapely.area(shapely.intersection(poly_a[at_a], poly_b[at_b]))
     enclosing = None
     if hull:
         both = np.concatenate([corners_a[rows], corners_b[cols]], axis=1)
