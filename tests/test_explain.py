@@ -106,6 +106,19 @@ def test_sampled_mode_states_an_interval_and_still_adds_up(run_folder, tmp_path)
     assert sum(entry["shares"].values()) == pytest.approx(entry["perfect"] - entry["actual"], abs=1e-9)
 
 
+def test_two_permutations_give_shares_without_an_interval_not_a_crash(run_folder, tmp_path):
+    # New-user trial: --samples 2 (one order and its reverse: one antithetic pair) made an infinite half-width
+    # that the JSON writer refused, after every counterfactual had run.
+    import shutil
+
+    shutil.copytree(run_folder, tmp_path / "run")
+    result = explain(tmp_path / "run", causes=["occlusion", "localisation"], metrics=["HOTA"], samples=2, workers=1)
+    entry = json.loads((result.out / "explain.json").read_text())["metrics"]["HOTA"]
+    assert entry["ci95"] == {"occlusion": None, "localisation": None}
+    assert sum(entry["shares"].values()) == pytest.approx(entry["perfect"] - entry["actual"], abs=1e-9)
+    assert "no confidence interval, --samples 3 or more gives one" in result.table and "±" not in result.table
+
+
 def test_explaining_again_leaves_only_the_plots_of_the_metrics_it_explains(explained, tmp_path):
     # New-user trial: a second explain with fewer metrics left the first one's waterfalls beside the new JSON.
     import shutil

@@ -162,7 +162,7 @@ def plan_game(dataset: Dataset, players: tuple[str, ...], samples: int | None, v
     permutations drawn from the dataset's seed (the same for every tracker of one dataset). ``verdicts``: also
     each single removal, and the error keys of those and of the actual run."""
     if samples is not None and samples < 2:
-        raise ExplainError(f"--samples: at least 2 permutations are needed for an interval, got {samples}")
+        raise ExplainError(f"--samples: at least 2 permutations (an order and its reverse) are needed, got {samples}")
     exact = samples is None and len(players) <= EXACT_LIMIT
     orders = None if exact else sample_orders(players, samples or DEFAULT_SAMPLES, dataset.seed)
     singles = {frozenset({p}) for p in players} if verdicts else set()
@@ -376,16 +376,18 @@ def explain_table(document: dict) -> str:
     names = list(metrics)
     counts = {name: name.rpartition(":")[2] in COUNT_METRICS for name in names}
     sampled = document["mode"] == "sampled"
+    interval = sampled and any(value is not None for entry in metrics.values() for value in entry["ci95"].values())
     head = (f"exact Shapley values over {document['coalitions']} coalitions" if not sampled else
             f"Shapley values sampled from {document['samples']} permutations ({document['coalitions']} coalitions; "
-            "± half-width of the 95% confidence interval)")
+            + ("± half-width of the 95% confidence interval)" if interval else
+               "one order and its reverse: no confidence interval, --samples 3 or more gives one)"))
     who = document["tracker"] + (f" ({document['label']})" if document["label"] != document["tracker"] else "")
     lines = [f"explain   {who} on {document['scenario']}, seed "
              f"{document['seed']}, {document['frames']} frames: {head}",
              "share    how much removing the cause group moves the metric toward the perfect sensor "
              "(shares add up to perfect − actual)", ""]
     width = max([len(p) for p in document["causes"]] + [16]) + 2
-    cell = 18 if sampled else 10
+    cell = 18 if interval else 10
     lines.append(" " * width + "".join(name.rjust(cell) for name in names))
     for row in ("actual", "perfect"):
         lines.append(row.ljust(width) + "".join(_format(metrics[n][row], counts[n]).rjust(cell) for n in names))
@@ -393,7 +395,7 @@ def explain_table(document: dict) -> str:
         cells = []
         for n in names:
             text = _format(metrics[n]["shares"][cause], counts[n], signed=True)
-            if sampled:
+            if interval:
                 text += " ±" + _format(metrics[n]["ci95"][cause], counts[n])
             cells.append(text.rjust(cell))
         lines.append(cause.ljust(width) + "".join(cells))

@@ -74,7 +74,8 @@ def prefixes(orders: Sequence[Sequence[str]]) -> set[Coalition]:
 
 @dataclass(frozen=True)
 class SampledShares:
-    """Sampled Shapley values ``{player: (M,)}`` and the half-widths of their 95 % confidence intervals."""
+    """Sampled Shapley values ``{player: (M,)}`` and the half-widths of their 95 % confidence intervals (NaN
+    from a single antithetic pair, which gives no interval)."""
 
     shares: dict[str, np.ndarray]
     half_width: dict[str, np.ndarray]
@@ -98,5 +99,5 @@ def sampled_shares(players: Sequence[str], orders: Sequence[Sequence[str]],
         shares[player] = rows.mean(axis=0)
         n = len(pairs)
         half[player] = (student_t.ppf(0.975, n - 1) * pairs.std(axis=0, ddof=1) / math.sqrt(n) if n > 1
-                        else np.full(rows.shape[1:], np.inf))
+                        else np.full(rows.shape[1:], np.nan))  # one pair: no spread to estimate, no interval
     return SampledShares(shares, half)
