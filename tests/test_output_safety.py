@@ -192,3 +192,14 @@ def test_a_damaged_or_older_simrig_dataset_is_replaced_only_with_overwrite(small
     assert main(argv) == 2 and "holds a simrig dataset that cannot be read" in _error(capsys)
     assert main([*argv, "--overwrite"]) == 0
     assert Dataset.open(again.path).frame_count == 2
+
+
+def test_a_json_document_that_cannot_be_written_leaves_no_file_behind(tmp_path):
+    # New-user trial: an explain.json with an infinite value left explain.json.tmp beside the run's files.
+    from simrig.dataset.manifest import write_json_atomic
+
+    (tmp_path / "keep.json").write_text('{"old": true}\n')
+    with pytest.raises(ValueError, match="not JSON compliant"):
+        write_json_atomic(tmp_path / "keep.json", {"share": float("inf")})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.json"]
+    assert (tmp_path / "keep.json").read_text() == '{"old": true}\n'

@@ -105,14 +105,18 @@ def check_manifest(path: Path, manifest: dict) -> None:
 
 
 def write_json_atomic(path: Path, data: dict) -> None:
-    """Write ``data`` as JSON to ``path`` through a temporary file, flushed to disk, then renamed."""
+    """Write ``data`` as JSON to ``path`` through a temporary file, flushed to disk, then renamed. ``data`` is
+    serialised first, so data that is not JSON (NaN, infinity) raises before any file is touched."""
+    text = json.dumps(data, indent=2, sort_keys=False, allow_nan=False) + "\n"
     temporary = path.with_name(path.name + ".tmp")
-    with temporary.open("w", encoding="utf-8") as handle:
-        json.dump(data, handle, indent=2, sort_keys=False, allow_nan=False)
-        handle.write("\n")
-        handle.flush()
-        os.fsync(handle.fileno())
-    os.replace(temporary, path)
+    try:
+        with temporary.open("w", encoding="utf-8") as handle:
+            handle.write(text)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(temporary, path)
+    finally:
+        temporary.unlink(missing_ok=True)
 
 
 def written_by_simrig(folder: Path) -> bool:
