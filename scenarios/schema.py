@@ -189,14 +189,18 @@ class Scenario(Strict):
 
 
 def windows_outside(scenario: Scenario, frames: int) -> list[str]:
-    """Perturbations of ``scenario`` whose window starts at or after ``frames`` (a ``--frames`` shorter than the
-    scenario's own cuts them off): one message each, for a warning."""
+    """Perturbations of ``scenario`` whose window does not fit in the ``frames`` generated (a ``--frames``
+    shorter than the scenario's own cuts them off): one message each, for a warning — no effect at all when the
+    window starts at or after ``frames``, only its first part when it ends there or later."""
     messages = []
     for index, perturbation in enumerate(scenario.perturbations):
-        first, _ = perturbation.frame_window(scenario.frame_rate_hz)
+        first, last = perturbation.frame_window(scenario.frame_rate_hz)
         if first >= frames:
             messages.append(f"perturbations.{index} ({perturbation.kind}) starts at frame {first}, after the last "
                             f"of the {frames} frames generated: it has no effect")
+        elif last >= frames:
+            messages.append(f"perturbations.{index} ({perturbation.kind}) covers frames {first}–{last}, but only "
+                            f"{frames} frames were generated: it applies to frames {first}–{frames - 1} only")
     return messages
 
 

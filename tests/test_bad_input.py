@@ -315,10 +315,14 @@ def test_settings_that_cannot_take_effect_are_warned_about(tmp_path, capsys):
         "[render]\nvisibility = false\n"
         '[[perturbations]]\nkind = "occlude"\nframes = [0, 1]\nactors = [9999]\n'
         '[[perturbations]]\nkind = "drop_frames"\nframes = [3, 3]\n'
+        '[[perturbations]]\nkind = "miss_burst"\nframes = [1, 5]\n'
     )
     assert main(["generate", str(scenario), "--frames", "3", "--out", str(tmp_path / "out"), "--quiet"]) == 0
     warnings = [line for line in capsys.readouterr().err.splitlines() if line.startswith("warning: ")]
     assert any("perturbations.0 (occlude): actor id(s) [9999] never appear" in line for line in warnings), warnings
     assert any("perturbations.1 (drop_frames) starts at frame 3, after the last of the 3 frames" in line
                for line in warnings), warnings
+    # new-user trial: a window that starts inside the run but ends after it was cut off without a word
+    assert any("perturbations.2 (miss_burst) covers frames 1–5, but only 3 frames were generated: it applies to "
+               "frames 1–2 only" in line for line in warnings), warnings
     assert any("traffic.vehicles = 40, but only" in line and "unreachable" in line for line in warnings), warnings
