@@ -7,6 +7,7 @@ line ``simrig: error: ...`` with exit status 2; no traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import sys
@@ -58,16 +59,17 @@ def _cmd_generate(args: argparse.Namespace) -> int:
 
     from .dataset import Dataset
 
-    scenario = load_scenario(args.scenario)
-    result = generate(
-        scenario,
-        seed=args.seed,
-        out=args.out,
-        frames=args.frames,
-        overwrite=args.overwrite,
-        images=args.images,
-        progress=not args.quiet,
-    )
+    with _naming_scenario_file(args.scenario):
+        scenario = load_scenario(args.scenario)
+        result = generate(
+            scenario,
+            seed=args.seed,
+            out=args.out,
+            frames=args.frames,
+            overwrite=args.overwrite,
+            images=args.images,
+            progress=not args.quiet,
+        )
     print(Dataset.open(result.path).summary())
     times = result.times
     print(
@@ -83,6 +85,19 @@ def _cmd_generate(args: argparse.Namespace) -> int:
             )
     _warn_ineffective(scenario, result.path)
     return 0
+
+
+@contextlib.contextmanager
+def _naming_scenario_file(name_or_path: str):
+    """A :class:`ScenarioError` raised while a scenario file is used — not only while it is read, e.g. a
+    perturbation naming a camera its rig lacks, found when the rig is built — names the file."""
+    try:
+        yield
+    except ScenarioError as error:
+        text = str(error)
+        if Path(str(name_or_path)).suffix == ".toml" and not text.startswith("scenario file "):
+            raise ScenarioError(f"scenario file {str(name_or_path)!r}: {text}") from None
+        raise
 
 
 def _warn_ineffective(scenario, dataset_path: Path) -> None:
@@ -262,12 +277,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .dataset import Dataset
 
     _output(args.out, "--out")
-    result = run_pipeline(
-        args.scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=args.out,
-        frames=args.frames, overwrite=args.overwrite, progress=not args.quiet, camera=args.camera,
-        frame_time_limit_s=args.frame_time_limit,
-        images=args.images,
-    )
+    with _naming_scenario_file(args.scenario):
+        result = run_pipeline(
+            args.scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=args.out,
+            frames=args.frames, overwrite=args.overwrite, progress=not args.quiet, camera=args.camera,
+            frame_time_limit_s=args.frame_time_limit,
+            images=args.images,
+        )
     manifest = Dataset.open(result.dataset).manifest
     if result.reused:
         print(f"dataset   reusing the complete dataset in {result.dataset} ({manifest['scenario']['name']}, "

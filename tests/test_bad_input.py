@@ -52,6 +52,7 @@ def inputs(tmp_path_factory, small_dataset, small_scenario):
         "visibility_tiny": "[render]\nvisibility_scale = 0.0001\n",
         "window_after_run": '[[perturbations]]\nkind = "miss_burst"\nframes = [50, 60]\n',
         "window_missing": '[[perturbations]]\nkind = "miss_burst"\n',
+        "camera_unknown": '[[perturbations]]\nkind = "blackout"\ncameras = ["CAM_TOP"]\nframes = [0, 1]\n',
         "actor_float": '[[perturbations]]\nkind = "occlude"\nframes = [0, 1]\nactors = [1.7]\n',
         "rate_nan": "frame_rate_hz = nan\n",
         "rate_inf": "frame_rate_hz = inf\n",
@@ -165,8 +166,16 @@ CASES = [
     ("visibility-no", "generate {root}/visibility_no.toml --out {out}", "render.visibility: Input should be a valid "
                                                                         "boolean"),
     ("visibility-scale-tiny", "generate {root}/visibility_tiny.toml --out {out}", "render.visibility_scale"),
-    ("window-after-run", "generate {root}/window_after_run.toml --out {out}", "perturbations.0.frames: the window "
+    ("window-after-run", "generate {root}/window_after_run.toml --out {out}", "window_after_run.toml': "
+                                                                              "perturbations.0.frames: the window "
                                                                               "starts at frame 50"),
+    # new-user trial: found when the rig is built, after the file was read: the message did not name the file
+    ("camera-unknown", "generate {root}/camera_unknown.toml --out {out}", "camera_unknown.toml': "
+                                                                          "perturbations.0.cameras: rig 'surround6' "
+                                                                          "has no camera 'CAM_TOP'"),
+    ("camera-unknown-run", "run {root}/camera_unknown.toml --out {out}", "camera_unknown.toml': "
+                                                                         "perturbations.0.cameras: rig 'surround6' "
+                                                                         "has no camera 'CAM_TOP'"),
     ("window-missing", "generate {root}/window_missing.toml --out {out}", "perturbations.0"),
     ("actor-id-float", "generate {root}/actor_float.toml --out {out}", "perturbations.0"),
     ("rate-nan", "generate {root}/rate_nan.toml --out {out}", "frame_rate_hz"),

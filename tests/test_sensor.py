@@ -145,7 +145,7 @@ def test_blackout_silences_a_camera_and_says_why():
 
 def test_a_perturbation_naming_an_unknown_camera_is_a_clear_error():
     scenario = _scenario(perturbations=[{"kind": "blackout", "frames": [0, 1], "cameras": ["CAM_TOP"]}])
-    with pytest.raises(ScenarioError, match=r"perturbations\[0\]\.cameras: rig 'surround6' has no camera 'CAM_TOP'"):
+    with pytest.raises(ScenarioError, match=r"perturbations\.0\.cameras: rig 'surround6' has no camera 'CAM_TOP'"):
         SensorModel(scenario, RIG, RandomStreams(0))
 
 

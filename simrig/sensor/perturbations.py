@@ -25,7 +25,7 @@ class Scheduled:
         unknown = [name for name in names if name not in rig.camera_names]
         if unknown:
             raise ScenarioError(
-                f"perturbations[{index}].cameras: rig {rig.name!r} has no camera {', '.join(map(repr, unknown))}; "
+                f"perturbations.{index}.cameras: rig {rig.name!r} has no camera {', '.join(map(repr, unknown))}; "
                 f"cameras: {', '.join(rig.camera_names)}"
             )
         self.cameras = frozenset(rig.camera_names.index(name) for name in names) if names else None
