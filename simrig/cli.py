@@ -330,8 +330,9 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     result = explain(args.run_dir, label=args.label, metrics=args.metric, causes=args.causes, samples=args.samples,
                      engine=args.engine, workers=args.workers, address=args.address, progress=True)
     print(result.table)
-    print(f"\nwrote     {result.out}: explain.json, explain.md, verdicts.parquet, {len(result.plots)} waterfall "
-          f"plots ({result.coalitions} counterfactual runs, {result.seconds:.0f} s)")
+    plots = f"{len(result.plots)} waterfall plot{'s' if len(result.plots) != 1 else ''}"
+    print(f"\nwrote     {result.out}: explain.json, explain.md, verdicts.parquet, {plots} "
+          f"({result.coalitions} counterfactual runs, {result.seconds:.0f} s)")
     return 0
 
 

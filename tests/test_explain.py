@@ -166,12 +166,20 @@ def test_planted_occlusion_takes_the_identity_switch_and_miss_loss_of_sort(tmp_p
 
 @pytest.mark.parametrize("arguments, message", [
     (["--causes", "occlusion,rain"], "--causes: unknown cause group 'rain'"),
-    (["--metric", "HOTA,SPEED"], "--metric: unknown metric 'SPEED'"),
+    (["--metric", "HOTA,SPEED"], "--metric: 'SPEED' is not a metric of this run; 3D: AMOTA, "),
+    (["--metric", "2d:AMOTA"], "--metric: '2d:AMOTA' is not a metric of this run; 3D: AMOTA, "),
 ])
 def test_bad_cause_or_metric_is_one_line(run_folder, capsys, arguments, message):
     assert main(["explain", str(run_folder), *arguments]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"simrig: error: {message}") and err.count("\n") == 1
+
+
+def test_a_file_given_as_the_run_folder_is_called_a_file(tmp_path, capsys):
+    (tmp_path / "my_scenario.toml").write_text('extends = "highway_surround6"\n')
+    assert main(["explain", str(tmp_path / "my_scenario.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "my_scenario.toml' is a file; give the folder of a 'simrig run'" in err and err.count("\n") == 1
 
 
 def test_a_run_folder_without_tracks_is_one_line(tmp_path, run_folder, capsys):

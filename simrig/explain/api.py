@@ -228,6 +228,8 @@ def _players(causes: list[str] | None, known: tuple[str, ...], present: tuple[st
 
 
 def _dataset(run_dir: Path) -> Dataset:
+    if run_dir.is_file():
+        raise ExplainError(f"{str(run_dir)!r} is a file; give the folder of a 'simrig run'")
     if not run_dir.is_dir():
         raise ExplainError(f"run folder {str(run_dir)!r} does not exist")
     try:
@@ -260,9 +262,10 @@ def _tracker_record(run_dir: Path, label: str) -> dict:
         if not isinstance(tracker, str) or not isinstance(params, dict):
             raise TypeError("tracker must be a name, params a table")
     except FileNotFoundError:
-        raise ExplainError(f"{path}: missing, so the tracker of this run cannot be recreated (a tracker passed "
-                           "as an object in Python, or a run made before simrig recorded its tracker); rerun "
-                           "'simrig run' with a registered tracker or module:attribute") from None
+        raise ExplainError(f"{path}: missing, so the tracker of this run cannot be recreated (tracks written by "
+                           "'simrig track' or by a tracker passed as an object in Python, or a run made before "
+                           "simrig recorded its tracker); make the run with 'simrig run' and a registered tracker "
+                           "or module:attribute") from None
     except (OSError, ValueError, KeyError, TypeError) as error:
         raise ExplainError(f"{path}: not a tracker record ({error})") from None
     try:
@@ -285,10 +288,17 @@ def choose_metrics(names: list[str] | None, has_3d: bool) -> dict[str, tuple[str
         elif not dimension and bare in METRICS_2D:
             chosen[name] = ("2d", bare)
         else:
-            available = [*(METRICS_3D if has_3d else ()), *METRICS_2D]
-            raise ExplainError(f"--metric: unknown metric {name!r} for this run; choose from "
-                               f"{', '.join(available)} (2d:NAME or 3d:NAME to pick a dimension)")
+            raise ExplainError(f"--metric: {name!r} is not a metric of this run; {_metric_choices(has_3d)}")
     return chosen
+
+
+def _metric_choices(has_3d: bool) -> str:
+    """The metrics a run can be explained on, per dimension, for an error message."""
+    two_d = ", ".join(METRICS_2D)
+    if not has_3d:
+        return f"its tracker has no 3D tracks, so choose a 2D metric: {two_d}"
+    return (f"3D: {', '.join(METRICS_3D)}; 2D: {two_d} (a bare name is the 3D metric where both have it; 2d:NAME "
+            "or 3d:NAME picks the dimension)")
 
 
 def run_tasks(tasks: list[CoalitionTask], engine: str, workers: int | None, address: str | None,
