@@ -72,20 +72,21 @@ def new_filter(box: np.ndarray, config: KalmanConfig) -> KalmanFilter:
 
 def predict(kf: KalmanFilter, dt: float, config: KalmanConfig) -> None:
     """Constant velocity over ``dt`` seconds: x ← F x, P ← F P Fᵀ + Q·dt."""
-    kf.predict(*_transition(dt, config))
+    F, Q = _transition(dt, config)
+    kf.predict(F=F, Q=Q)
     kf.x[HEADING, 0] = wrap(kf.x[HEADING, 0])
 
 
 @functools.lru_cache(maxsize=64)
-def _transition(dt: float, config: KalmanConfig) -> tuple[None, None, np.ndarray, np.ndarray]:
-    """filterpy's ``predict(u, B, F, Q)`` arguments for a step of ``dt`` seconds: (None, None, F, Q·dt),
-    read-only — every track of a tracker steps by the same few Δt, so they are built once per Δt."""
+def _transition(dt: float, config: KalmanConfig) -> tuple[np.ndarray, np.ndarray]:
+    """F and Q·dt for a step of ``dt`` seconds, read-only — every track of a tracker steps by the same few Δt,
+    so they are built once per Δt."""
     F = np.eye(10)
     F[0, 7] = F[1, 8] = F[2, 9] = dt
     Q = np.diag([config.process_variance] * MEASURED + [config.process_velocity_variance] * 3) * max(dt, 1e-6)
     F.setflags(write=False)
     Q.setflags(write=False)
-    return None, None, F, Q
+    return F, Q
 
 
 def update(kf: KalmanFilter, z: np.ndarray) -> None:

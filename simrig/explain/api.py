@@ -33,11 +33,12 @@ from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
 from simrig.pipeline.run import DATASET_DIR, REPORT, SCORES_DIR, TRACKER_RECORD, TRACKS_DIR, write_text_atomic
 from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.scenarios.schema import scenario_from_record
+from simrig.scoring.attribution import KINDS
 from simrig.scoring.results import METRICS_2D, METRICS_3D
 from simrig.sensor.groups import all_groups, present_groups
 
 from ..benchmark.engines import local_map, machine_workers, ray_map
-from .coalition import ERROR_KINDS, CoalitionResult, CoalitionTask, TrackerRun, evaluate_coalition
+from .coalition import CoalitionResult, CoalitionTask, TrackerRun, evaluate_coalition
 from .shapley import Coalition, all_coalitions, exact_shares, prefixes, sample_orders, sampled_shares
 from .waterfall import waterfall
 
@@ -323,7 +324,7 @@ def _verdicts(run_dir: Path, label: str, players: tuple[str, ...],
     """The run's FN/IDS/FRAG rows (with their context causes) and, per row, the groups whose removal alone
     makes it disappear; counts per kind and group."""
     actual = pq.read_table(run_dir / SCORES_DIR / label / "errors.parquet")
-    actual = actual.filter(pc.is_in(actual.column("kind"), value_set=pa.array(ERROR_KINDS)))
+    actual = actual.filter(pc.is_in(actual.column("kind"), value_set=pa.array(KINDS)))
     rows = actual.select(["dimension", "kind", "actor_id", "frame", "camera"]).to_pydict()
     keys = list(zip(rows["dimension"], rows["kind"], rows["actor_id"], rows["frame"], rows["camera"], strict=True))
     fixed = [[p for p in players if key not in results[frozenset({p})].errors] for key in keys]
@@ -337,7 +338,7 @@ def _verdicts(run_dir: Path, label: str, players: tuple[str, ...],
             entry[group] += 1
         if not groups:
             entry["no single cause"] += 1
-    counts = {dimension: {kind: kinds[kind] for kind in ERROR_KINDS if kind in kinds}  # FN, IDS, FRAG in order
+    counts = {dimension: {kind: kinds[kind] for kind in KINDS if kind in kinds}  # FN, IDS, FRAG in order
               for dimension, kinds in counts.items()}
     return {"table": table, "counts": counts}
 

@@ -26,8 +26,6 @@ from simrig.scenarios.schema import scenario_from_record
 from simrig.scoring import score
 from simrig.scoring.attribution import KINDS
 
-ERROR_KINDS = KINDS
-"""The errors a verdict is given for: the scorer's kinds of error (FN, IDS, FRAG)."""
 ErrorKey = tuple[str, str, int, int, str]
 """(dimension, kind, ground-truth actor id, frame, camera — empty in 3D): how an error is matched across runs."""
 
@@ -106,7 +104,7 @@ def metric_value(report, dimension: str, name: str) -> float:
 
 def error_keys(errors) -> frozenset[ErrorKey]:
     """The FN/IDS/FRAG rows of an errors table as matching keys."""
-    rows = errors.filter(pc.is_in(errors.column("kind"), value_set=pa.array(ERROR_KINDS))).select(
+    rows = errors.filter(pc.is_in(errors.column("kind"), value_set=pa.array(KINDS))).select(
         ["dimension", "kind", "actor_id", "frame", "camera"]).to_pydict()
     return frozenset(zip(rows["dimension"], rows["kind"], rows["actor_id"], rows["frame"], rows["camera"],
                          strict=True))

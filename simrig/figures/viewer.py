@@ -36,10 +36,10 @@ import pyarrow.compute as pc
 from simrig.dataset import Dataset
 from simrig.dataset.outputs import check_output_path
 from simrig.errors import SimrigError
+from simrig.scoring.attribution import KINDS
 
 from .mosaic import CLUTTER_COLOUR, identity_colour, track_colour
 
-ERROR_KINDS = ("FN", "IDS", "FRAG")
 INSTALL_HINT = "the viewer needs rerun-sdk: pip install 'simrig[view]' (or pip install rerun-sdk)"
 
 
@@ -209,7 +209,7 @@ def _log_errors(rr, recording, errors_path: Path, timestamps: dict[int, float]) 
     errors = pq.read_table(errors_path).to_pylist()
     level = {"FN": rr.TextLogLevel.DEBUG, "IDS": rr.TextLogLevel.WARN, "FRAG": rr.TextLogLevel.INFO}
     for error in errors:
-        if error["kind"] not in ERROR_KINDS:
+        if error["kind"] not in KINDS:
             continue
         recording.set_time("frame", sequence=int(error["frame"]))
         recording.set_time("time", duration=float(timestamps.get(int(error["frame"]), 0.0)))

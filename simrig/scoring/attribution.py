@@ -188,5 +188,5 @@ def errors_by_cause(errors: pa.Table) -> dict[str, dict[str, dict[str, int]]]:
         out[name] = {cause: row for cause, row in table.items() if any(row.values()) or cause == "total"}
         ignored = int(np.count_nonzero(mine & ~counted))
         if ignored:
-            out[name][IGNORED] = {"FN": ignored, "IDS": 0, "FRAG": 0}
+            out[name][IGNORED] = {kind: ignored if kind == "FN" else 0 for kind in KINDS}
     return out

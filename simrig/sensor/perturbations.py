@@ -28,9 +28,8 @@ class Scheduled:
                 f"perturbations.{index}.cameras: rig {rig.name!r} has no camera {', '.join(map(repr, unknown))}; "
                 f"cameras: {', '.join(rig.camera_names)}"
             )
-        self.cameras = frozenset(rig.camera_names.index(name) for name in names) if names else None
-        self._camera_mask = np.array([self.cameras is None or index in self.cameras
-                                      for index in range(len(rig.cameras))])
+        affected = {rig.camera_names.index(name) for name in names}
+        self._camera_mask = np.array([not names or index in affected for index in range(len(rig.cameras))])
         self._chosen: np.ndarray | None = None
 
     def active(self, frame: int) -> bool:
