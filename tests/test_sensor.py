@@ -103,9 +103,10 @@ def test_an_object_in_two_overlapping_cameras_gives_two_detections_with_independ
     model = SensorModel(_scenario(sensor={"detection": {"probability": 1.0}, "clutter": {"rate_per_frame": 0.0}}),
                         RIG, RandomStreams(0))
     output = model.observe(state, projection, Visibility.unmeasured(projection))
-    seen = {b.camera.name: b for b in output.batches if b.detected.any()}
+    batch = output.batch
+    seen = {camera.name: index for index, camera in enumerate(batch.cameras) if batch.detected[index].any()}
     assert set(seen) == {"CAM_FRONT", "CAM_FRONT_LEFT"}
-    a, b = seen["CAM_FRONT"].det_boxes3d[0], seen["CAM_FRONT_LEFT"].det_boxes3d[0]
+    a, b = batch.det_boxes3d[seen["CAM_FRONT"], 0], batch.det_boxes3d[seen["CAM_FRONT_LEFT"], 0]
     assert np.all(np.isfinite(a)) and not np.allclose(a[:3], b[:3])
 
 
@@ -120,11 +121,11 @@ def test_calibration_error_rotates_the_estimate_about_the_camera():
     projection = project_boxes(boxes, RIG, EGO)
     output = SensorModel(scenario, RIG, RandomStreams(0)).observe(_frame(boxes), projection,
                                                                   Visibility.unmeasured(projection))
-    estimate = output.batches[0].det_boxes3d[0]
+    estimate = output.batch.det_boxes3d[0, 0]  # the front camera's estimate of the car
     camera = np.array(RIG.cameras[0].position[:2])
     assert np.degrees(np.arctan2(estimate[1] - camera[1], estimate[0] - camera[0])) == pytest.approx(2.0)
     assert np.degrees(estimate[6]) == pytest.approx(2.0)
-    assert output.batches[0].causes[0] & Cause.CALIBRATION
+    assert output.batch.causes[0, 0] & Cause.CALIBRATION
 
 
 def test_blackout_silences_a_camera_and_says_why():
@@ -136,10 +137,10 @@ def test_blackout_silences_a_camera_and_says_why():
     projection = project_boxes(boxes, RIG, EGO)
     model = SensorModel(scenario, RIG, RandomStreams(0))
     output = model.observe(_frame(boxes), projection, Visibility.unmeasured(projection))
-    front = output.batches[0]
-    assert not front.detected.any() and len(front.clutter["scores"]) == 0
-    assert front.causes[0] & Cause.BLACKOUT
-    assert len(output.batches[1].clutter["scores"]) > 0  # other cameras still report clutter
+    batch = output.batch  # camera 0 is CAM_FRONT
+    assert not batch.detected[0].any() and len(batch.false_positives(0)["scores"]) == 0
+    assert batch.causes[0, 0] & Cause.BLACKOUT
+    assert len(batch.false_positives(1)["scores"]) > 0  # other cameras still report clutter
     assert output.events == ("blackout#0 cameras=CAM_FRONT",)
 
 
@@ -160,10 +161,10 @@ def test_embeddings_are_unit_vectors_closer_to_their_identity_when_unoccluded():
         visibility = Visibility.unmeasured(projection)
         visibility = Visibility(visibility.visible_px, visibility.silhouette_px,
                                 np.where(projection.in_view, occlusion, np.nan))
-        batch = model.observe(_frame(boxes), projection, visibility).batches[0]
+        embeddings = model.observe(_frame(boxes), projection, visibility).batch.embeddings[0]  # CAM_FRONT
         identity = np.array([model.embeddings.identity(i) for i in range(len(boxes))])
-        np.testing.assert_allclose(np.linalg.norm(batch.embeddings, axis=1), 1.0, atol=1e-5)
-        similarity[occlusion] = float(np.mean(np.sum(batch.embeddings * identity, axis=1)))
+        np.testing.assert_allclose(np.linalg.norm(embeddings, axis=1), 1.0, atol=1e-5)
+        similarity[occlusion] = float(np.mean(np.sum(embeddings * identity, axis=1)))
     assert similarity[0.0] > 0.95 > similarity[0.8]
 
 

@@ -60,9 +60,9 @@ def test_depth_error_lag1_correlation_is_exp_minus_dt_over_tau_at_any_frame_rate
     centre = None
     errors, frames, actors = [], [], []
     for frame, output, _ in _run(scenario, boxes, int(30 * rate_hz)):
-        batch = output.batches[0]
-        centre = batch.world_from_camera[:3, 3]
-        errors.append(np.linalg.norm(batch.det_boxes3d[:, :3] - centre, axis=1)
+        batch = output.batch  # camera 0: CAM_FRONT
+        centre = batch.world_from_camera[0, :3, 3]
+        errors.append(np.linalg.norm(batch.det_boxes3d[0, :, :3] - centre, axis=1)
                       - np.linalg.norm(boxes[:, :3] - centre, axis=1))
         frames.append(np.full(len(boxes), frame))
         actors.append(np.arange(len(boxes)))
@@ -79,7 +79,7 @@ def test_mean_miss_burst_length_in_seconds_is_the_configured_one_at_any_frame_ra
     boxes = _cars_ahead(60)
     detected, frames, actors = [], [], []
     for frame, output, _ in _run(scenario, boxes, int(30 * rate_hz)):
-        detected.append(output.batches[0].detected)
+        detected.append(output.batch.detected[0])
         frames.append(np.full(len(boxes), frame))
         actors.append(np.arange(len(boxes)))
     detected, frames, actors = map(np.concatenate, (detected, frames, actors))
@@ -97,11 +97,11 @@ def test_switching_one_cause_off_leaves_every_other_draw_bit_identical():
         off = {**on, switch: {}}
         for (_, a, _), (_, b, _) in zip(_run(_scenario(**on), boxes, 5), _run(_scenario(**off), boxes, 5),
                                         strict=True):
-            for x, y in zip(a.batches, b.batches, strict=True):
-                assert np.array_equal(x.detected, y.detected)
-                np.testing.assert_array_equal(x.det_boxes3d, y.det_boxes3d)
-                np.testing.assert_array_equal(x.scores, y.scores)
-                np.testing.assert_array_equal(x.embeddings, y.embeddings)
+            x, y = a.batch, b.batch  # every camera at once
+            assert np.array_equal(x.detected, y.detected)
+            np.testing.assert_array_equal(x.det_boxes3d, y.det_boxes3d)
+            np.testing.assert_array_equal(x.scores, y.scores)
+            np.testing.assert_array_equal(x.embeddings, y.embeddings)
 
 
 def test_a_ghost_is_one_3d_box_seen_consistently_lives_its_life_and_scores_as_configured():
@@ -115,13 +115,13 @@ def test_a_ghost_is_one_3d_box_seen_consistently_lives_its_life_and_scores_as_co
             first_seen.setdefault(ghost, frame)
             last_seen[ghost] = frame
         seen: dict[int, list] = {}
-        for batch in output.batches:
-            rows = np.nonzero(batch.clutter.get("causes", np.empty(0)) > 0)[0] if batch.clutter else []
-            ghost_rows = [r for r in rows if batch.clutter["causes"][r] & Cause.GHOST]
-            for ghost, row in zip(batch.ghost_ids.tolist(), ghost_rows, strict=True):
-                seen.setdefault(ghost, []).append((batch.camera_index, batch.clutter["boxes3d"][row],
-                                                   batch.clutter["boxes2d"][row]))
-                scores.append(batch.clutter["scores"][row])
+        for camera in range(len(output.batch.cameras)):
+            clutter = output.batch.false_positives(camera)
+            rows = np.nonzero(clutter["causes"] > 0)[0]
+            ghost_rows = [r for r in rows if clutter["causes"][r] & Cause.GHOST]
+            for ghost, row in zip(output.batch.ghost_ids[camera].tolist(), ghost_rows, strict=True):
+                seen.setdefault(ghost, []).append((camera, clutter["boxes3d"][row], clutter["boxes2d"][row]))
+                scores.append(clutter["scores"][row])
         for views in seen.values():
             box3d = views[0][1]
             projection = project_boxes(box3d[None], RIG, EGO)
@@ -143,7 +143,7 @@ def test_reid_roc_auc_is_the_configured_one():
                          embedding={"target_auc": target, "lookalike_weight": 0.3, "viewpoint_weight": 0.3,
                                     "occlusion_sigma": 0.0})
     boxes = _cars_ahead(300)
-    embeddings = [output.batches[0].embeddings for _, output, _ in _run(scenario, boxes, 2)]
+    embeddings = [output.batch.embeddings[0] for _, output, _ in _run(scenario, boxes, 2)]  # CAM_FRONT
     similarity = embeddings[0] @ embeddings[1].T  # (actor at frame 0) × (actor at frame 1)
     same = np.diag(similarity)
     different = similarity[~np.eye(len(boxes), dtype=bool)]
@@ -156,9 +156,9 @@ def test_scores_fall_with_localisation_error():
                          score={"error_gain": 0.5, "error_scale_m": 1.0, "sigma": 0.05})
     boxes = _cars_ahead(2000)
     _, output, _ = next(_run(scenario, boxes, 1))
-    batch = output.batches[0]
-    error = np.hypot(*(batch.det_boxes3d[:, :2] - boxes[:, :2]).T)
-    assert stats.spearmanr(error, batch.scores).statistic < -0.5
+    estimates, scores = output.batch.det_boxes3d[0], output.batch.scores[0]  # CAM_FRONT
+    error = np.hypot(*(estimates[:, :2] - boxes[:, :2]).T)
+    assert stats.spearmanr(error, scores).statistic < -0.5
 
 
 @pytest.mark.parametrize(("table", "expected"), [

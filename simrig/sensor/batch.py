@@ -1,5 +1,5 @@
 """The working record of the detector at one frame, for every camera of the rig at once, which every sensor
-effect reads and updates; and one camera's share of it."""
+effect reads and updates."""
 
 from __future__ import annotations
 
@@ -101,54 +101,10 @@ class SensorBatch:
                 "labels": np.empty(0, dtype=object), "embeddings": np.empty((0, d), dtype=np.float32),
                 "causes": np.empty(0, dtype=np.int64)}
 
-    def camera(self, index: int) -> CameraDetections:
-        """Camera ``index``'s share of the batch (views, not copies)."""
-        clutter = self.false_positives(index)
-        return CameraDetections(
-            camera=self.cameras[index], camera_index=index, world_from_camera=self.world_from_camera[index],
-            actor_ids=self.context.actor_ids, classes=self.classes,
-            in_view=self.in_view[index], probability=self.probability[index], causes=self.causes[index],
-            detected=self.detected[index], det_boxes2d=self.det_boxes2d[index], det_boxes3d=self.det_boxes3d[index],
-            scores=self.scores[index], labels=self.labels[index],
-            embeddings=None if self.embeddings is None else self.embeddings[index], clutter=clutter,
-            ghost_ids=self.ghost_ids[index], detection_index=self.detection_index[index],
-            clutter_index=self.clutter_index[index])
-
     @property
     def actor_ids(self) -> np.ndarray:
         return self.context.actor_ids
 
     def __len__(self) -> int:
         """The number of actors ``N``."""
-        return len(self.classes)
-
-
-@dataclass(frozen=True, eq=False)
-class CameraDetections:
-    """What one camera's detector decided at one frame (views of a :class:`SensorBatch`): the camera, its
-    index in the rig and its pose ``world_from_camera`` ``(4, 4)``; per actor
-    ``(N, …)`` the probability, causes, whether detected and the detection's outputs; the false positives
-    (``clutter``: a dict of ``boxes2d``, ``boxes3d``, ``scores``, ``labels``, ``embeddings``, ``causes``); the
-    position of each detection in the camera's list."""
-
-    camera: Camera
-    camera_index: int
-    world_from_camera: np.ndarray
-    actor_ids: np.ndarray
-    classes: np.ndarray
-    in_view: np.ndarray
-    probability: np.ndarray
-    causes: np.ndarray
-    detected: np.ndarray
-    det_boxes2d: np.ndarray
-    det_boxes3d: np.ndarray
-    scores: np.ndarray
-    labels: np.ndarray
-    embeddings: np.ndarray | None
-    clutter: dict[str, np.ndarray]
-    ghost_ids: np.ndarray
-    detection_index: np.ndarray
-    clutter_index: np.ndarray
-
-    def __len__(self) -> int:
         return len(self.classes)

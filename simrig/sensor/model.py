@@ -15,7 +15,7 @@ from ..render.visibility import Visibility
 from ..seeding import RandomStreams
 from ..types import GroundTruthFrame, Rig
 from .appearance import Embeddings
-from .batch import CameraDetections, FrameContext, SensorBatch
+from .batch import FrameContext, SensorBatch
 from .effects import (
     Box2DNoise,
     Clutter,
@@ -42,11 +42,6 @@ class SensorOutput:
     batch: SensorBatch
     dropped: bool
     events: tuple[str, ...]
-
-    @property
-    def batches(self) -> tuple[CameraDetections, ...]:
-        """Each camera's detections, in rig order."""
-        return tuple(self.batch.camera(index) for index in range(len(self.batch.cameras)))
 
 
 class SensorModel:
