@@ -355,12 +355,10 @@ def _check_explain_options(args: argparse.Namespace) -> None:
         raise SimrigError(f"{' and '.join(given)} {'needs' if len(given) == 1 else 'need'} --explain")
     if args.explain_seeds is not None:
         from .benchmark.suite import load_suite
+        from .explain.bench import check_explain_seeds
 
         suite, _ = load_suite(args.suite, trust_file=args.trust_file)
-        unknown = sorted(set(args.explain_seeds) - set(suite.seeds))
-        if unknown:
-            raise SimrigError(f"--explain-seeds: {', '.join(map(str, unknown))} not a seed of suite {suite.name!r} "
-                              f"(its seeds: {', '.join(map(str, suite.seeds))})")
+        check_explain_seeds(args.explain_seeds, suite.seeds, f"suite {suite.name!r}")
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:

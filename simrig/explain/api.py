@@ -39,7 +39,7 @@ from simrig.sensor.groups import all_groups, present_groups
 
 from ..benchmark.engines import local_map, machine_workers, ray_map
 from .coalition import CoalitionResult, CoalitionTask, TrackerRun, evaluate_coalition
-from .shapley import Coalition, all_coalitions, exact_shares, prefixes, sample_orders, sampled_shares
+from .shapley import Coalition, all_coalitions, coalition_order, exact_shares, prefixes, sample_orders, sampled_shares
 from .waterfall import waterfall
 
 EXPLAIN_DIR, CACHE_DIR = "explain", "cache"
@@ -170,7 +170,7 @@ def plan_game(dataset: Dataset, players: tuple[str, ...], samples: int | None, v
     needed = set(all_coalitions(players)) if exact else prefixes(orders) | singles
     needed |= {frozenset(), frozenset(players)}
     keep_errors = frozenset(singles | {frozenset()}) if verdicts else frozenset()
-    return GamePlan(players, exact, orders, tuple(sorted(needed, key=lambda c: (len(c), sorted(c)))), keep_errors)
+    return GamePlan(players, exact, orders, tuple(sorted(needed, key=coalition_order)), keep_errors)
 
 
 def settle(plan: GamePlan, results: dict[Coalition, CoalitionResult]) -> Game:
@@ -211,7 +211,7 @@ def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[
 def failed_coalition(results: dict[Coalition, CoalitionResult]) -> str | None:
     """Why a game cannot be settled — the first (smallest) coalition its tracker failed on, named by the
     groups removed, with the failure — or None when every coalition ran."""
-    failed = sorted((c for c, r in results.items() if r.failure), key=lambda c: (len(c), sorted(c)))
+    failed = sorted((c for c, r in results.items() if r.failure), key=coalition_order)
     if not failed:
         return None
     removed = ", ".join(sorted(failed[0])) or "nothing (the actual sensor)"

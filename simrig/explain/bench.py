@@ -23,6 +23,7 @@ from ..benchmark.results import RESULTS
 from ..benchmark.suite import TrackerEntry
 from .api import ExplainError, choose_metrics, failed_coalition, plan_game, run_tasks, settle, tracker_run
 from .coalition import CoalitionTask, TrackerRun
+from .shapley import coalition_order
 
 EXPLAIN_TABLE = "explain.parquet"
 EXPLAIN_CACHE = "explain-cache"
@@ -43,6 +44,15 @@ def not_explained(schema: pa.Schema) -> list[dict]:
     """The ``{tracker, cell, reason}`` entries the schema of an explanation table lists as left out (none for an
     older one)."""
     return json.loads((schema.metadata or {}).get(NOT_EXPLAINED.encode(), b"[]"))
+
+
+def check_explain_seeds(seeds, known, of: str) -> None:
+    """An :class:`ExplainError` naming every one of ``seeds`` that is not in ``known`` (the seeds of ``of``: a
+    suite, checked before a bench runs, or a finished bench)."""
+    unknown = sorted(set(seeds) - set(known))
+    if unknown:
+        raise ExplainError(f"--explain-seeds: {', '.join(map(str, unknown))} not a seed of {of} (its seeds: "
+                           f"{', '.join(map(str, sorted(known)))})")
 
 
 def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[str] | None = None,
@@ -66,11 +76,7 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
     columns = [name for name in wanted if name in results.schema.names]
     base = [r for r in results.select(columns).to_pylist() if r["sweep"] == ""]
     if seeds is not None:
-        known = sorted({r["seed"] for r in base})
-        unknown = sorted(set(seeds) - set(known))
-        if unknown:
-            raise ExplainError(f"--explain-seeds: {', '.join(map(str, unknown))} not a seed of this bench (its seeds: "
-                               f"{', '.join(map(str, known))})")
+        check_explain_seeds(seeds, {r["seed"] for r in base}, "this bench")
         base = [r for r in base if r["seed"] in seeds]
     pairs = sorted({(r["scenario"], r["seed"], r["cell"], r["tracker"], r["scored"]) for r in base
                     if not r.get("failure")})
@@ -97,7 +103,7 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
             games.append((scenario_name, seed, cell, tracker, chosen, plan))
         # one task per (cell, coalition): the sensor reruns once for every tracker that needs it
         tasks += [CoalitionTask(str(dataset.path), tuple(sorted(c)), str(out / EXPLAIN_CACHE / cell), tuple(r))
-                  for c, r in sorted(runs.items(), key=lambda item: (len(item[0]), sorted(item[0])))]
+                  for c, r in sorted(runs.items(), key=lambda item: coalition_order(item[0]))]
     outcomes: list[dict] = [{} for _ in games]
     for task, results in run_tasks(tasks, engine, workers, address, progress):
         coalition = frozenset(task.removed)

@@ -56,6 +56,15 @@ def exact_shares(players: Sequence[str], values: Mapping[Coalition, np.ndarray])
     return shares
 
 
+def coalition_order(coalition: Coalition) -> tuple[int, list[str]]:
+    """Sort key of coalitions: smallest first, then by their groups' names (the order they are run and named in).
+
+    >>> sorted([frozenset({"b"}), frozenset(), frozenset({"a", "c"}), frozenset({"a"})], key=coalition_order)
+    [frozenset(), frozenset({'a'}), frozenset({'b'}), frozenset({'a', 'c'})]
+    """
+    return len(coalition), sorted(coalition)
+
+
 def sample_orders(players: Sequence[str], samples: int, seed: int) -> list[tuple[str, ...]]:
     """``samples`` random orders of ``players`` (rounded up to an even count): each drawn order followed by its
     reverse. Same seed, same orders."""
