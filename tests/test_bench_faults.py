@@ -9,6 +9,7 @@ import sys
 import time
 from pathlib import Path
 
+from terminal import ctrl_c_delivered
 from test_bench import TINY_SCENARIO, TINY_SUITE
 
 CELLS = 12
@@ -49,7 +50,7 @@ def _start(suite: Path, out: Path, workers: int) -> subprocess.Popen:
     command = [sys.executable, "-m", "simrig.cli", "bench", str(suite), "--out", str(out), "--workers",
                str(workers), "--quiet"]
     return subprocess.Popen(command, start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+                            text=True, preexec_fn=ctrl_c_delivered)
 
 
 def test_sigkill_of_the_driver_leaves_no_simrig_process(tmp_path):

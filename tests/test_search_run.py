@@ -14,6 +14,7 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 from gated_trackers import GATE, WAITING, add_tickets
+from terminal import ctrl_c_delivered
 
 from simrig.search import load_space, run_search
 from simrig.search.fragments import FOLDER
@@ -71,7 +72,7 @@ def _start(space: Path, out: Path, cache: Path, gate: Path | None) -> subprocess
         env[GATE] = str(gate)
     return subprocess.Popen([sys.executable, "-m", "simrig.cli", "search", str(space), "--tracker", TRACKER,
                              "--out", str(out), "--cache", str(cache), "--quiet"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, preexec_fn=ctrl_c_delivered)
 
 
 def _run_and_interrupt(space: Path, out: Path, cache: Path, gate: Path, evaluations: int, sig: int
