@@ -59,8 +59,8 @@ def exact_shares(players: Sequence[str], values: Mapping[Coalition, np.ndarray])
 def coalition_order(coalition: Coalition) -> tuple[int, list[str]]:
     """Sort key of coalitions: smallest first, then by their groups' names (the order they are run and named in).
 
-    >>> sorted([frozenset({"b"}), frozenset(), frozenset({"a", "c"}), frozenset({"a"})], key=coalition_order)
-    [frozenset(), frozenset({'a'}), frozenset({'b'}), frozenset({'a', 'c'})]
+    >>> [sorted(c) for c in sorted([frozenset("b"), frozenset(), frozenset("ac"), frozenset("a")], key=coalition_order)]
+    [[], ['a'], ['b'], ['a', 'c']]
     """
     return len(coalition), sorted(coalition)
 
