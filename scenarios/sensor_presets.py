@@ -25,6 +25,16 @@ _NO_NOISE = {"depth_sigma_m": 0.0, "depth_sigma_per_m": 0.0, "lateral_sigma_m": 
              "yaw_sigma_deg": 0.0, "yaw_flip_probability": 0.0, "velocity_sigma_mps": 0.0}
 
 
+REID_FASTREID_MOT17: dict[str, Any] = {
+    "dimension": 12, "sigma": 0.445, "drift_sigma": 0.635, "drift_time_s": 0.73, "slow_drift_sigma": 0.68,
+    "slow_drift_time_s": 10.8, "occlusion_sigma": 0.5, "truncation_sigma": 0.3, "distance_scale_m": 100.0,
+    "lookalike_weight": 0.3, "viewpoint_weight": 0.15,
+}
+"""The realistic presets' re-ID: distances by frame gap like FastReID SBS50's on MOT17 val (pedestrians; the
+source and the check are in :mod:`simrig.detector.reid`), calibrated on the catalog's worlds at 10 Hz by
+``tests/calibration/reid_preset.py`` (reports/fidelity/reid.md)."""
+
+
 def _camera_detector(depth_per_m: float, lateral: float, size: float, yaw_deg: float, flip: float,
                      velocity: float, recall: float) -> dict[str, Any]:
     """A realistic camera detector's tables with the fitted error magnitudes."""
@@ -39,8 +49,7 @@ def _camera_detector(depth_per_m: float, lateral: float, size: float, yaw_deg: f
         "score": {"base": 0.35, "gain": 0.55, "sigma": 0.08, "error_gain": 0.25, "error_scale_m": 1.0,
                   "distance_gain": 0.15, "distance_scale_m": 60.0},
         "clutter": {"rate_per_frame": 0.3, "score_range": [0.05, 0.6]},
-        "embedding": {"target_auc": 0.85, "occlusion_sigma": 0.8, "truncation_sigma": 0.3,
-                      "distance_scale_m": 60.0, "lookalike_weight": 0.3, "viewpoint_weight": 0.3},
+        "embedding": REID_FASTREID_MOT17,
         "ghosts": {"birth_rate_hz": 0.5, "mean_life_s": 1.0, "shadow_fraction": 0.5, "score_mean": 0.45,
                    "score_concentration": 8.0},
         "duplicates": {"probability": 0.03},

@@ -155,31 +155,48 @@ class ClutterConfig(Strict):
 class EmbeddingConfig(Strict):
     """Appearance embeddings (re-ID features): per identity a fixed unit vector, mixed with a vector shared
     by every vehicle of its class and colour (``lookalike_weight``) and with a view vector per side (front,
-    side, back) it is seen from (``viewpoint_weight``); plus noise, renormalised. The noise vector has norm
-    ≈ σ = (sigma + occlusion_sigma · occlusion + truncation_sigma · truncation) · (1 + d / distance_scale_m).
+    side, back) it is seen from (``viewpoint_weight``); plus two drifts with memory, per actor and camera
+    (Ornstein–Uhlenbeck processes: a fast one for pose and lighting, a slow one for lasting change of look),
+    and white noise per observation, renormalised. The white noise vector has norm ≈ σ = (sigma +
+    occlusion_sigma · occlusion + truncation_sigma · truncation) · (1 + d / distance_scale_m); the drifts have
+    norms ≈ ``drift_sigma`` and ``slow_drift_sigma`` (same growth factors). An actor seen again after g frames
+    keeps a share exp(−g·Δt / τ) of each drift, so it looks less like itself the longer the gap.
 
     With ``target_auc`` set, ``sigma`` is not a setting but solved for: the ROC AUC of cosine distance
-    separating same-identity from different-identity pairs of unoccluded, untruncated observations from
-    the same side at d → 0 is ``target_auc`` (traffic's class mix, ``colours`` colours)."""
+    separating same-identity pairs one frame apart from different-identity pairs, unoccluded, untruncated,
+    from the same side at d → 0, is ``target_auc`` (traffic's class mix, ``colours`` colours).
+
+    ``dimension`` is an effective dimension: different actors' unit vectors have cosine similarities spread by
+    about 1/√D, so it sets how far apart strangers look as much as the vectors' length (``simrig detector fit
+    --embeddings`` fits it from a real model's distances)."""
 
     dimension: Annotated[int, Field(ge=2, le=1024)] = 64
-    """[-] embedding length."""
+    """[-] embedding length (the effective dimension: see above)."""
     sigma: NonNegativeFloat = 0.2
-    """[-] noise norm for an unoccluded object (ignored when ``target_auc`` is set: then it is solved for)."""
+    """[-] white noise norm for an unoccluded object (ignored when ``target_auc`` is set: then it is solved for)."""
     occlusion_sigma: NonNegativeFloat = 0.8
-    """[-] noise norm added at full occlusion."""
+    """[-] white noise norm added at full occlusion."""
     truncation_sigma: NonNegativeFloat = 0.0
-    """[-] noise norm added at full truncation."""
+    """[-] white noise norm added at full truncation."""
     distance_scale_m: PositiveFloat | None = None
     """[m] D in the noise's growth factor 1 + d / D; omitted: no growth with range."""
     target_auc: Annotated[float, Field(gt=0.5, le=1, allow_inf_nan=False)] | None = None
-    """[-] ROC AUC of same- vs different-identity cosine distance at the reference condition; (0.5, 1]."""
+    """[-] ROC AUC of same- (one frame apart) vs different-identity cosine distance at the reference condition;
+    (0.5, 1]."""
     lookalike_weight: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.0
     """[-] share of an identity vector common to its class and colour (their cosine similarity)."""
     colours: Annotated[int, Field(ge=1, le=1000)] = 8
     """[-] number of paint colours, drawn uniformly per vehicle."""
     viewpoint_weight: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.0
     """[-] share of an embedding that depends on the side seen (front, side, back)."""
+    drift_sigma: Annotated[float, Field(ge=0, le=10, allow_inf_nan=False)] = 0.0
+    """[-] norm of the fast drift (0: none)."""
+    drift_time_s: Annotated[float, Field(gt=0, le=3600, allow_inf_nan=False)] = 0.5
+    """[s] correlation time of the fast drift."""
+    slow_drift_sigma: Annotated[float, Field(ge=0, le=10, allow_inf_nan=False)] = 0.0
+    """[-] norm of the slow drift (0: none)."""
+    slow_drift_time_s: Annotated[float, Field(gt=0, le=3600, allow_inf_nan=False)] = 5.0
+    """[s] correlation time of the slow drift."""
 
 
 class GhostConfig(Strict):

@@ -200,3 +200,35 @@ def test_same_scenario_and_seed_give_the_same_bytes_under_a_realistic_preset(tmp
     assert hashes[0] == hashes[1]
     other = generate(scenario, seed=4, out=tmp_path / "c", frames=25).manifest
     assert other["files"]["detections"]["sha256"] != hashes[0]["detections"]
+
+
+def _appearance(dimension=512, **settings) -> dict:
+    return {"dimension": dimension, "occlusion_sigma": 0.0, **settings}
+
+
+def test_reid_drift_has_memory_an_actor_looks_less_like_itself_the_longer_the_gap():
+    """Mean cosine of one actor's observations g frames apart, from the model's definition in a high dimension
+    (where |e|² concentrates at S = 1 + s_f² + s_s² + σ²): (1 + s_f²·φ_f^g + s_s²·φ_s^g) / S."""
+    sigma, fast, tau_fast, slow, tau_slow = 0.3, 0.6, 0.5, 0.5, 5.0
+    scenario = _scenario(detection={"probability": 1.0}, embedding=_appearance(
+        sigma=sigma, drift_sigma=fast, drift_time_s=tau_fast, slow_drift_sigma=slow, slow_drift_time_s=tau_slow))
+    frames = [output.batch.embeddings[0] for _, output, _ in _run(scenario, _cars_ahead(60), 41)]  # CAM_FRONT
+    total = 1 + fast**2 + slow**2 + sigma**2
+    for gap in (1, 5, 20, 40):
+        measured = np.mean([np.sum(frames[t] * frames[t + gap], axis=1).mean() for t in range(41 - gap)])
+        expected = (1 + fast**2 * np.exp(-gap * 0.1 / tau_fast) + slow**2 * np.exp(-gap * 0.1 / tau_slow)) / total
+        assert measured == pytest.approx(expected, abs=0.01), gap
+
+
+def test_reid_drift_draws_change_nothing_but_the_embeddings():
+    boxes = _cars_ahead(30)
+    runs = []
+    for drift in (0.0, 0.7):
+        scenario = _scenario(detection={"probability": 0.8}, box3d={"depth_sigma_m": 0.5},
+                             embedding=_appearance(dimension=16, sigma=0.3, drift_sigma=drift, slow_drift_sigma=drift))
+        runs.append([output.batch for _, output, _ in _run(scenario, boxes, 5)])
+    for plain, drifting in zip(*runs, strict=True):
+        np.testing.assert_array_equal(plain.detected, drifting.detected)
+        np.testing.assert_array_equal(plain.det_boxes3d, drifting.det_boxes3d)
+        np.testing.assert_array_equal(plain.scores, drifting.scores)
+    assert not np.allclose(np.nan_to_num(runs[0][-1].embeddings), np.nan_to_num(runs[1][-1].embeddings))

@@ -65,7 +65,7 @@ def present_groups(scenario: Scenario, camera_count: int, scored_in_3d: bool = T
         "false_positives": s.clutter.rate_per_frame > 0 or s.ghosts.birth_rate_hz > 0,
         "confusion": any(row.get(true, 0.0) < sum(row.values()) for true, row in s.confusion.matrix.items()),
         "reid": s.embedding.sigma > 0 or s.embedding.target_auc is not None or s.embedding.occlusion_sigma > 0
-                or s.embedding.truncation_sigma > 0,
+                or s.embedding.truncation_sigma > 0 or s.embedding.drift_sigma > 0 or s.embedding.slow_drift_sigma > 0,
         "duplicates": s.duplicates.probability > 0,
         "cross_camera": camera_count > 1 and scored_in_3d,
     }

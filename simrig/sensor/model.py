@@ -75,7 +75,7 @@ class SensorModel:
             (occlusions if isinstance(effect, ScheduledOcclusion) else others).append(effect)
             self.scheduled.append(effect)
         class_mix = scenario.traffic.class_mix
-        self.embeddings = Embeddings(streams, sensor.embedding, class_mix, enabled=on["reid"])
+        self.embeddings = Embeddings(streams, sensor.embedding, class_mix, enabled=on["reid"], period_s=period)
         self.ghosts = GhostWorld(sensor.ghosts, class_mix, rig, period, sensor.embedding.dimension, streams,
                                  reported=on["false_positives"])
         seen_as: list[SensorEffect] = [] if on["occlusion"] and on["truncation"] else [
