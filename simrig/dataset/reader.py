@@ -39,7 +39,7 @@ def _stack(table: pa.Table, names: tuple[str, ...]) -> np.ndarray:
     return np.column_stack([table.column(name).to_numpy() for name in names])
 
 
-def _embedding_matrix(column: pa.ChunkedArray, dimension: int) -> np.ndarray:
+def embedding_matrix(column: pa.ChunkedArray, dimension: int) -> np.ndarray:
     """``(R, D)`` float32 embeddings from a list<float> column whose lists hold ``dimension`` (D) values or
     none; a row of NaN where a detection has none."""
     column = column.combine_chunks()
@@ -421,7 +421,7 @@ class Dataset:
                 scores=table.column("score").to_numpy(),
                 labels=string_codes(table.column("label"), label_codes, f"{self.path}: detections label"),
                 cameras=string_codes(table.column("camera"), camera_codes, f"{self.path}: detections camera"),
-                embeddings=_embedding_matrix(table.column("embedding"), dimension),
+                embeddings=embedding_matrix(table.column("embedding"), dimension),
             )
 
     def summary(self) -> str:

@@ -7,18 +7,45 @@ from pathlib import Path
 
 
 def _cmd_measure(args: argparse.Namespace) -> int:
-    from .measure import measure
+    import json
+    from dataclasses import asdict
 
-    result = measure(args.dataset)
-    print(result.table())
+    from .measure import measure, pooled_reid
+    from .reid import format_table
+
+    results = [measure(path) for path in args.dataset]
+    print("\n\n".join(result.table() for result in results))
+    pooled = pooled_reid(args.dataset) if len(results) > 1 else None
+    if pooled is not None:
+        print(f"\nre-ID pooled over the {len(results)} datasets (the same number of pairs from each)")
+        print(format_table(pooled))
     if args.json is not None:
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(result.to_json() + "\n", encoding="utf-8")
+        text = results[0].to_json() if pooled is None else json.dumps(
+            {"datasets": [asdict(result) for result in results], "reid_pooled": [asdict(row) for row in pooled]},
+            indent=2)
+        args.json.write_text(text + "\n", encoding="utf-8")
         print(f"written to {args.json}")
     return 0
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
+    from ..errors import SimrigError
+
+    if args.embeddings is not None:
+        from .fit_appearance import fit_embeddings_to_toml
+
+        for name in ("detections", "truth", "cameras"):
+            if getattr(args, name) is not None:
+                raise SimrigError(f"--{name}: not with --embeddings (a re-ID log is fitted on its own)")
+        print(fit_embeddings_to_toml(args.embeddings, args.out, args.frame_rate_hz,
+                                     lookalike_weight=args.lookalike_weight, colours=args.colours))
+        return 0
+    if args.detections is None:
+        raise SimrigError("detector fit: give --detections (a detector's output) or --embeddings (a re-ID log)")
+    for name, default in (("frame_rate_hz", 10.0), ("lookalike_weight", 0.3), ("colours", 8)):
+        if getattr(args, name) != default:
+            raise SimrigError(f"--{name.replace('_', '-')}: only with --embeddings")
     from .fit import fit_to_toml
 
     print(fit_to_toml(args.detections, args.truth, args.out, args.cameras))
@@ -29,13 +56,24 @@ def add_detector_command(commands) -> None:
     """Add ``detector measure`` and ``detector fit`` to the CLI's subcommands."""
     detector = commands.add_parser("detector", help="measure a dataset's detector errors or fit a detector model")
     actions = detector.add_subparsers(dest="detector_command", required=True, metavar="ACTION")
-    measure = actions.add_parser("measure", help="nuScenes TP errors, recall/precision by band, autocorrelation")
-    measure.add_argument("dataset", type=Path)
+    measure = actions.add_parser("measure", help="nuScenes TP errors, recall/precision by band, autocorrelation, "
+                                                 "re-ID distances by frame gap")
+    measure.add_argument("dataset", type=Path, nargs="+",
+                         help="dataset folder(s); with several, the re-ID table is also pooled over them")
     measure.add_argument("--json", type=Path, default=None, metavar="OUT", help="also write the numbers as JSON")
     measure.set_defaults(run=_cmd_measure)
     fit = actions.add_parser("fit", help="fit the detector model's parameters and write a [sensor] table")
-    fit.add_argument("--detections", type=Path, required=True,
+    fit.add_argument("--detections", type=Path, default=None,
                      help="a simrig dataset folder, or a nuScenes detection-results JSON")
+    fit.add_argument("--embeddings", type=Path, default=None, metavar="FILE",
+                     help="instead: a re-ID model's log (Parquet: frame, camera, identity, embedding[, sequence]); "
+                          "writes a [sensor.embedding] table")
+    fit.add_argument("--frame-rate-hz", type=float, default=10.0, metavar="HZ",
+                     help="with --embeddings: the log's frame rate (default 10)")
+    fit.add_argument("--lookalike-weight", type=float, default=0.3, metavar="W",
+                     help="with --embeddings: kept, not fitted (default 0.3, the realistic presets')")
+    fit.add_argument("--colours", type=int, default=8, metavar="N",
+                     help="with --embeddings: kept, not fitted (default 8)")
     fit.add_argument("--truth", type=Path, default=None,
                      help="ground truth of a detection-results JSON: the nuScenes tables folder (or the data "
                           "root above it) or a simrig dataset (leave out for a simrig dataset's own detections)")

@@ -7,6 +7,8 @@
   motorcycles) are dropped.
 * Recall and precision at the 2 m threshold by distance band from the ego; recall by visibility band
   (the best visible fraction over the cameras that see it, nuScenes' 0–40–60–80–100% bins).
+* Re-ID distances of the detections' embeddings by frame gap, in the form a real re-ID model's are published
+  (:mod:`.reid`), beside the source's values.
 * From the dataset's ``sensor_truth`` (which detection each actor produced in each camera): the lag-1
   autocorrelation of the depth error (range from the camera, estimate minus truth) over consecutive
   frames of one (actor, camera) pair, and the mean length [frames, s] of runs of misses of an actor in one
@@ -24,9 +26,11 @@ import numpy as np
 
 from ..causes import Cause, cause_masks
 from ..dataset import Dataset
+from ..dataset.reader import embedding_matrix
 from ..geometry import camera_from_world
 from ..types import BOX3D_FIELDS, EgoPose
 from .nuscenes_metrics import DIST_THRESHOLDS, TP_METRICS, TP_THRESHOLD, accumulate, calc_ap, calc_tp, match_class
+from .reid import EmbeddingLog, ReidRow, format_table, reid_table
 
 CLASS_RANGE_M = {"car": 50.0, "truck": 50.0, "bus": 50.0, "motorcycle": 40.0}
 DISTANCE_BANDS_M = (0.0, 10.0, 20.0, 30.0, 40.0, 50.0)
@@ -57,6 +61,7 @@ class Measurement:
     miss_burst_frames: float
     miss_burst_s: float
     miss_bursts: int
+    reid: list[ReidRow]
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), indent=2)
@@ -78,6 +83,7 @@ class Measurement:
             f"depth error lag-1 autocorrelation {self.depth_error_lag1:.3f} ({self.depth_error_pairs} pairs)",
             f"mean miss burst {self.miss_burst_frames:.2f} frames = {self.miss_burst_s:.3f} s "
             f"({self.miss_bursts} bursts)",
+            *([format_table(self.reid)] if self.reid else ["re-ID: the detections carry no embeddings"]),
         ]
         return "\n".join(lines)
 
@@ -166,12 +172,31 @@ def measure(path: Path | str) -> Measurement:
                                    visibility_labels),
         depth_error_lag1=lag1, depth_error_pairs=pairs,
         miss_burst_frames=burst_frames, miss_burst_s=burst_frames / rate, miss_bursts=int(len(bursts)),
+        reid=reid_table(log) if (log := embedding_log(dataset)).embeddings.shape[1] else [],
     )
+
+
+def pooled_reid(paths: list[Path | str]) -> list[ReidRow]:
+    """The re-ID table over several datasets, each one sequence."""
+    return reid_table(EmbeddingLog.concatenate([embedding_log(Dataset.open(path)) for path in paths]))
+
+
+def embedding_log(dataset: Dataset) -> EmbeddingLog:
+    """The embeddings of the dataset's detections of actors (not of clutter, ghosts or duplicates), each with
+    its frame, camera index and actor id; one sequence."""
+    links = linked_errors(dataset)
+    column = dataset.table("detections").column("embedding")
+    lengths = np.diff(column.combine_chunks().offsets.to_numpy())
+    embeddings = embedding_matrix(column, int(lengths.max()) if len(lengths) else 0)[links["row"]]
+    keep = np.isfinite(embeddings).all(axis=1)
+    return EmbeddingLog(np.zeros(int(keep.sum()), dtype=np.int64), links["frame"][keep].astype(np.int64),
+                        links["camera"][keep], links["actor"][keep].astype(np.int64), embeddings[keep].astype(float))
 
 
 def linked_errors(dataset: Dataset) -> dict[str, np.ndarray]:
     """Every detection of an actor joined to its truth via ``sensor_truth``: frame, camera index, actor id,
-    true and detected boxes ``(R, 9)``, the camera's optical centre in the world ``(R, 3)`` and score."""
+    true and detected boxes ``(R, 9)``, the camera's optical centre in the world ``(R, 3)``, score, labels and
+    the detection's row in the ``detections`` table."""
     detections, truth = dataset.table("detections"), dataset.table("ground_truth")
     sensor = dataset.table("sensor_truth")
     cameras = dataset.rig.camera_names
@@ -204,7 +229,7 @@ def linked_errors(dataset: Dataset) -> dict[str, np.ndarray]:
     return {"frame": s_frame, "camera": s_camera, "actor": s_actor, "truth": _boxes(truth)[truth_row],
             "estimate": _boxes(detections)[det_row], "centre": centre,
             "score": _column(detections, "score")[det_row],
-            "label": np.asarray(detections.column("label").to_pylist(), dtype=object)[det_row],
+            "label": np.asarray(detections.column("label").to_pylist(), dtype=object)[det_row], "row": det_row,
             "true_label": np.asarray(truth.column("class").to_pylist(), dtype=object)[truth_row]}
 
 

@@ -1,0 +1,157 @@
+"""Re-ID distances measured as a real model's are published (simrig.detector.reid), the appearance fit from a
+log (simrig.detector.fit_appearance) and its one-line errors. Expected values come from arithmetic on hand-built
+logs and from the settings the data was generated with."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+from simrig.scenarios.schema import RigConfig, Scenario
+
+from simrig.cli import main
+from simrig.detector.fit_appearance import fit_appearance, read_embedding_log
+from simrig.detector.reid import CROSS_CAMERA, EmbeddingLog, reid_table
+from simrig.geometry import project_boxes
+from simrig.render.visibility import Visibility
+from simrig.rig import build_rig
+from simrig.seeding import RandomStreams
+from simrig.sensor.model import SensorModel
+from simrig.types import EgoPose, GroundTruthFrame
+
+
+def _rotating_log(frames: int = 40, step_rad: float = 0.1) -> EmbeddingLog:
+    """Two identities in 2D turning by ``step_rad`` a frame in camera 0, 90° apart; camera 1 sees identity 0
+    0.5 rad further on at the same frames."""
+    t = np.arange(frames)
+    angle = np.concatenate([step_rad * t, np.pi / 2 + step_rad * t, step_rad * t + 0.5])
+    return EmbeddingLog(np.zeros(3 * frames, dtype=np.int64), np.tile(t, 3),
+                        np.repeat([0, 0, 1], frames), np.repeat([0, 1, 0], frames),
+                        np.column_stack([np.cos(angle), np.sin(angle)]))
+
+
+def test_reid_table_shares_are_the_arithmetic_of_a_hand_built_log():
+    rows = {row.gaps: row for row in reid_table(_rotating_log())}
+    # d = 0.5·(1 − cos(0.1·g)) ≤ 0.2 ⇔ g ≤ 9, ≤ 0.25 ⇔ g ≤ 10; in 40 frames gap g has 40 − g pairs per
+    # (identity, camera) track, and there are three tracks
+    pairs = {g: 40 - g for g in range(6, 16)}
+    band = rows["6-15"]
+    assert band.same_pairs == 3 * sum(pairs.values())
+    assert band.same_below[0] == pytest.approx(sum(pairs[g] for g in range(6, 10)) / sum(pairs.values()))
+    assert band.same_below[1] == pytest.approx(sum(pairs[g] for g in range(6, 11)) / sum(pairs.values()))
+    assert rows["1"].same_below == (1.0, 1.0)
+    assert rows["1"].auc == 1.0  # every same pair (d = 0.0025) is closer than every different one (d ≥ 0.45)
+    assert rows["1"].different_below == (0.0, 0.0)
+    assert rows["16-30"].same_below[0] == 0.0  # g ≥ 16 turns 1.6 rad: d > 0.5
+    cross = rows[CROSS_CAMERA]
+    assert cross.same_pairs == 40 and cross.same_median == pytest.approx(0.5 * (1 - np.cos(0.5)))
+    assert rows["121-240"].same_pairs == 0 and np.isnan(rows["121-240"].auc)
+
+
+RIG = build_rig(RigConfig())
+
+
+def _sensor_log(settings: dict, seed: int, actors: int = 40, frames: int = 200) -> EmbeddingLog:
+    """Embeddings the sensor model gives ``actors`` cars ahead of the front camera, every frame detected."""
+    scenario = Scenario.model_validate({
+        "name": "t", "render": {"visibility": False}, "traffic": {"class_mix": {"car": 1.0}},
+        "sensor": {"detection": {"probability": 1.0}, "clutter": {"rate_per_frame": 0.0},
+                   "embedding": {"occlusion_sigma": 0.0, **settings}}})
+    boxes = np.zeros((actors, 9))
+    boxes[:, 0] = RIG.cameras[0].position[0] + 20.0
+    boxes[:, 3:6] = 4.5, 1.8, 1.5
+    ego = EgoPose(0.0, 0.0, 0.0, 0.0)
+    model = SensorModel(scenario, RIG, RandomStreams(seed))
+    projection = project_boxes(boxes, RIG, ego)
+    visibility = Visibility.unmeasured(projection)
+    vectors = []
+    for frame in range(frames):
+        state = GroundTruthFrame(frame=frame, timestamp=frame / 10.0, ego=ego, actor_ids=np.arange(actors),
+                                 classes=np.full(actors, "car", dtype=object), boxes=boxes)
+        vectors.append(model.observe(state, projection, visibility).batch.embeddings[0].astype(float))
+    return EmbeddingLog(np.zeros(frames * actors, dtype=np.int64), np.repeat(np.arange(frames), actors),
+                        np.zeros(frames * actors, dtype=np.int64), np.tile(np.arange(actors), frames),
+                        np.concatenate(vectors))
+
+
+TRUE = {"dimension": 12, "sigma": 0.45, "drift_sigma": 0.63, "drift_time_s": 0.73, "slow_drift_sigma": 0.68,
+        "slow_drift_time_s": 10.8, "lookalike_weight": 0.3}
+TOLERANCE = {"sigma": 0.10, "drift_sigma": 0.15, "drift_time_s": 0.20, "slow_drift_sigma": 0.25}
+"""Relative tolerances of the round trip (40 cars, 200 frames at 10 Hz); the dimension within ±2 and the slow
+drift's correlation time within a factor 2 (a 20 s log holds two of its 10.8 s)."""
+
+
+def _check_round_trip(seed: int) -> None:
+    fit = fit_appearance(_sensor_log(TRUE, seed), 10.0).settings
+    assert abs(fit["dimension"] - TRUE["dimension"]) <= 2, (seed, fit)
+    for name, tolerance in TOLERANCE.items():
+        assert fit[name] == pytest.approx(TRUE[name], rel=tolerance), (seed, name, fit)
+    assert TRUE["slow_drift_time_s"] / 2 <= fit["slow_drift_time_s"] <= 2 * TRUE["slow_drift_time_s"], (seed, fit)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_fit_recovers_the_appearance_settings_the_data_was_made_with(seed):
+    _check_round_trip(seed)
+
+
+@pytest.mark.slow
+def test_fit_recovers_the_appearance_settings_over_20_seeds():
+    for seed in range(100, 120):
+        _check_round_trip(seed)
+
+
+def _write_log(path: Path, log: EmbeddingLog, embeddings: list | None = None, identity=None) -> Path:
+    pq.write_table(pa.table({
+        "frame": log.frame, "camera": [f"cam{c}" for c in log.camera],
+        "identity": log.identity if identity is None else identity,
+        "embedding": embeddings if embeddings is not None else [list(map(float, e)) for e in log.embeddings]}), path)
+    return path
+
+
+def test_fit_command_writes_settings_a_scenario_accepts(tmp_path, capsys):
+    log = _write_log(tmp_path / "log.parquet", _sensor_log(TRUE, 3, actors=30, frames=120))
+    assert main(["detector", "fit", "--embeddings", str(log), "--out", str(tmp_path / "fit.toml")]) == 0
+    assert "mean cos same" in capsys.readouterr().out
+    import tomllib
+
+    table = tomllib.loads((tmp_path / "fit.toml").read_text())["sensor"]
+    scenario = Scenario.model_validate({"name": "t", "sensor": table})
+    assert scenario.sensor.embedding.dimension == pytest.approx(12, abs=2)
+    assert read_embedding_log(log).embeddings.shape == (30 * 120, 12)
+
+
+@pytest.mark.parametrize(("case", "expected"), [
+    ("dimensions", "column embedding: row 0 has 12 values but row 7 has 11; one length expected"),
+    ("nan", "column embedding: row 3 holds NaN or infinity"),
+    ("one-identity", "column identity: only one identity"),
+    ("zero", "column embedding: row 5 is all zeros"),
+    ("missing-column", "missing column(s) identity"),
+    ("not-parquet", "not a Parquet table"),
+])
+def test_bad_embedding_logs_are_one_line(case, expected, tmp_path, capsys):
+    log = _sensor_log(TRUE, 0, actors=4, frames=10)
+    vectors = [list(map(float, e)) for e in log.embeddings]
+    path = tmp_path / f"{case}.parquet"
+    if case == "dimensions":
+        vectors[7] = vectors[7][:11]
+        _write_log(path, log, vectors)
+    elif case == "nan":
+        vectors[3][0] = float("nan")
+        _write_log(path, log, vectors)
+    elif case == "zero":
+        vectors[5] = [0.0] * 12
+        _write_log(path, log, vectors)
+    elif case == "one-identity":
+        _write_log(path, log, identity=np.zeros(len(log), dtype=np.int64))
+    elif case == "missing-column":
+        pq.write_table(pa.table({"frame": log.frame, "camera": log.camera, "embedding": vectors}), path)
+    else:
+        path.write_text("frame,camera\n1,2\n")
+    code = main(["detector", "fit", "--embeddings", str(path), "--out", str(tmp_path / "fit.toml")])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and lines[0].startswith("simrig: error: "), lines
+    assert expected in lines[0] and path.name in lines[0], lines[0]
+    assert not (tmp_path / "fit.toml").exists()
