@@ -14,7 +14,7 @@ from .curves import curve_table, plot_sweep, plot_sweep_by_scenario
 from .groups import groups
 from .load import BenchResults, load_bench
 from .markdown import table
-from .summary import camera_table, causes_table, scenario_table, tracker_table
+from .summary import camera_table, causes_table, paired_table, scenario_table, tracker_table
 from .worst_cell import inspect_worst
 
 
@@ -62,6 +62,13 @@ def _results_section(bench: BenchResults) -> list[str]:
              "At each scenario's own settings: metrics are means over scenarios and seeds, counts are sums.", ""]
     for group in groups(bench.results):
         lines += [f"### {group.title}", ""] + tracker_table(bench, group) + [""]
+        paired = paired_table(bench, group)
+        if paired:
+            first = next(iter(dict.fromkeys(bench.results.loc[bench.results["scored"] == group.key, "tracker"])))
+            lines += [f"Paired against `{first}` on the same sequences (scenario × seed): the mean per-sequence "
+                      "difference (tracker − reference; IDS and IDSW per sequence) with its 95 % BCa bootstrap "
+                      "interval over sequences; `n.s.`: the interval contains 0, so the suite cannot tell the two "
+                      "apart.", ""] + paired + [""]
         lines += ["Per scenario: HOTA, mean over seeds (identity switches, summed over seeds).", ""]
         lines += scenario_table(bench, group) + [""]
         per_camera = camera_table(bench, group)

@@ -8,6 +8,7 @@ from ..scoring.attribution import ATTRIBUTION_CAUSES, IGNORED
 from .groups import COUNT_COLUMNS, Group
 from .load import BenchResults
 from .markdown import number, table
+from .paired import paired_difference
 
 
 def base_rows(bench: BenchResults) -> pd.DataFrame:
@@ -30,6 +31,30 @@ def tracker_table(bench: BenchResults, group: Group) -> list[str]:
     header = ["tracker", "scenarios", "sequences"] + [
         f"{name} (sum)" if column in COUNT_COLUMNS else name for column, name in group.metrics]
     return table(header, out)
+
+
+def paired_table(bench: BenchResults, group: Group) -> list[str]:
+    """Rows: every tracker of ``group`` but the first; cells: its paired difference from the first tracker in each
+    of the group's curve metrics, over the (scenario, seed) sequences both ran at the base points — the mean
+    difference per sequence with its 95 % interval (:mod:`.paired`). Empty with fewer than two trackers."""
+    rows = base_rows(bench)
+    rows = rows[rows["scored"] == group.key]
+    trackers = list(dict.fromkeys(rows["tracker"]))
+    if len(trackers) < 2:
+        return []
+    columns = [column for column, _ in group.curve_metrics]
+    per_sequence = rows.groupby(["tracker", "scenario", "seed"], sort=False)[columns].mean()
+    reference = per_sequence.loc[trackers[0]]
+    out = []
+    for tracker in trackers[1:]:
+        mine = per_sequence.loc[tracker]
+        both = reference.index.intersection(mine.index)
+        cells = [f"`{tracker}`", str(len(both))]
+        for column in columns:
+            difference = paired_difference(mine.loc[both, column].to_numpy(), reference.loc[both, column].to_numpy())
+            cells.append(difference.text(digits=1 if column in COUNT_COLUMNS else 3))
+        out.append(cells)
+    return table(["tracker", "sequences"] + [f"Δ {name}" for _, name in group.curve_metrics], out)
 
 
 def scenario_table(bench: BenchResults, group: Group) -> list[str]:
