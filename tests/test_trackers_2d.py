@@ -151,7 +151,7 @@ def test_bytetrack_finds_a_lost_track_again_within_its_buffer():
     assert ids_in(run("bytetrack", frames, track_buffer=2))[9] == [2]  # lost for too long: a new track
 
 
-@pytest.mark.parametrize("name", ["deepsort", "bytetrack"])
+@pytest.mark.parametrize("name", ["deepsort", "bytetrack", "botsort"])
 def test_a_box_shrinking_to_nothing_never_gives_an_empty_box(name):
     # A box at the image border shrinking fast (a car leaving the view): the filter's height velocity would
     # carry the predicted height below zero on the first missed frame. A counterfactual bench run once
@@ -164,3 +164,37 @@ def test_a_box_shrinking_to_nothing_never_gives_an_empty_box(name):
         for track in tracks:
             x1, y1, x2, y2 = track.boxes2d["left"].as_array()
             assert x2 > x1 and y2 > y1, (track, tracks)
+
+
+# -- BoT-SORT-style ----------------------------------------------------------------------------------------------
+def test_botsort_appearance_decides_between_two_overlapping_boxes_where_bytetrack_takes_the_closer():
+    """At frame 5 a stranger appears 4 px from where the track is predicted (IoU distance 1 − 76/84 = 0.095) and
+    the tracked object 12 px off (0.26): BoT-SORT's fused cost min(d_iou, d̂_cos) is 0 for the same appearance
+    (d = 0 < 0.25 and IoU distance < 0.5) and 0.095 for the stranger (d = 0.5: appearance not used), so it keeps
+    the object; ByteTrack on IoU alone takes the stranger's box. (With the stranger exactly on the prediction
+    both costs would be 0: the minimum lets appearance only lower a cost.)"""
+    frames = [frame(k, {"left": [detection(100, identity=0)]}) for k in range(5)]
+    frames.append(frame(5, {"left": [detection(104, identity=1), detection(112, identity=0)]}))
+    for name, towards_object in (("botsort", True), ("bytetrack", False)):
+        out = run(name, frames)
+        kept = [track for track in out[5] if track.track_id == out[4][0].track_id]
+        assert len(kept) == 1 and (kept[0].boxes2d["left"].x1 > 104) == towards_object, (name, kept)
+
+
+def test_botsort_compensates_the_ego_turning_from_the_known_ego_motion():
+    """A far object straight ahead while the ego yaws left by ψ: it stays at bearing 0 in the world, so the left
+    camera (yaw 0, fx 721.5 px) sees it at u = cx + fx·tan ψ (pinhole, a point at infinity). A sudden 0.12 rad
+    turn moves its box 87 px, beyond any overlap with the last box: with the motion compensation the track keeps
+    its id; without it the track is lost and a new one starts."""
+    camera = STEREO.cameras[0]
+    yaws = [0.0, 0.0, 0.0, 0.0, 0.12, 0.12, 0.12, 0.12]
+
+    def view(k):
+        u = camera.cx + camera.fx * np.tan(yaws[k])
+        box = Detection(Box2D(u - 20.0, 160.0, u + 20.0, 190.0), 0.9, ActorClass.CAR)
+        return SensorFrame(k, k * 0.1, EgoPose(0.0, 0.0, 0.0, yaws[k]), STEREO, {"left": (box,), "right": ()})
+
+    frames = [view(k) for k in range(len(yaws))]
+    assert ids_in(run("botsort", frames)) == [[1]] * len(yaws)
+    plain = ids_in(run("botsort", frames, motion_compensation=False))
+    assert plain[3] == [1] and plain[-1] not in ([], [1])

@@ -5,10 +5,12 @@ Trackers import only :mod:`simrig.types` (the shared records), never the world, 
 Registered here: ``saga`` (SAGA-Track with FOTA), ``global_hungarian`` (AB3DMOT-style pooled one-to-one),
 ``percam_merge`` (per-camera trackers + heuristic merging), ``simpletrack`` (3D GIoU, two-stage), ``mutr3d``
 (3D tracks projected into every camera, associated there), ``polymot`` (the modern filter baseline:
-category-specific motion, multi-cue cost, two-stage association), and the 2D per-camera trackers ``sort`` and
-``deepsort`` and ``collabmot`` (stereo collaboration on top of them).
+category-specific motion, multi-cue cost, two-stage association), the 2D per-camera trackers ``sort``,
+``deepsort``, ``bytetrack`` and ``botsort`` (BoT-SORT-style: IoU and appearance fused, ego-motion
+compensation), and ``collabmot`` (stereo collaboration on top of them).
 """
 
+from .botsort import botsort
 from .bytetrack import bytetrack
 from .collabmot import collabmot
 from .deepsort import deepsort
@@ -34,6 +36,7 @@ for _name, _factory in (
     ("mutr3d", mutr3d),
     ("polymot", polymot),
     ("bytetrack", bytetrack),
+    ("botsort", botsort),
 ):
     register(_name, _factory)
 

@@ -13,7 +13,7 @@ from typing import Protocol
 
 import numpy as np
 
-from simrig.types import Box2D, Rig, SensorFrame, Track
+from simrig.types import Box2D, EgoPose, Rig, SensorFrame, Track
 
 from .clock import FrameClock
 from .detections import LABELS, DetectionArrays, detection_arrays
@@ -70,14 +70,18 @@ def camera_track(track: LocalTrack, camera: str, track_id: int) -> Track:
 class PerCameraTracking:
     """Runs ``make()`` — a fresh single-camera tracker — on every camera of the rig (or on ``cameras`` only).
     Output ids are unique across cameras: a (camera, local id) pair gets the next id the first time it is
-    reported."""
+    reported. With ``motion`` (rig, pose before, pose now → ``(C, 3, 3)`` image homographies), each camera's
+    tracker is told how its camera moved since the last frame (``tracker.compensate(H)``) before it steps."""
 
-    def __init__(self, make: Callable[[], CameraTracker], cameras: tuple[str, ...] | None = None):
+    def __init__(self, make: Callable[[], CameraTracker], cameras: tuple[str, ...] | None = None, *,
+                 motion: Callable[[Rig, EgoPose, EgoPose], np.ndarray] | None = None):
         self.make = make
         self.only = tuple(cameras) if cameras else None
         self.trackers: dict[str, CameraTracker] = {}
         self.counter = FrameCounter()
         self._ids: dict[tuple[str, int], int] = {}
+        self.motion = motion
+        self._previous_ego: EgoPose | None = None
 
     def reset(self, *, rig: Rig, seed: int | None = None) -> None:
         """Fresh trackers for the rig's cameras; ``seed`` is unused (the trackers are deterministic)."""
@@ -89,14 +93,20 @@ class PerCameraTracking:
         self.trackers = {name: self.make() for name in (self.only or names)}
         self.counter.reset()
         self._ids = {}
+        self._previous_ego = None
 
     def step(self, frame: SensorFrame) -> list[Track]:
         detections = detection_arrays(frame, require_3d=False)
         frames = self.counter.advance(frame)
+        homographies = (self.motion(frame.rig, self._previous_ego, frame.ego)
+                        if self.motion is not None and self._previous_ego is not None else None)
+        self._previous_ego = frame.ego
         out: list[Track] = []
         for index, name in enumerate(frame.rig.camera_names):
             if name not in self.trackers:
                 continue
+            if homographies is not None:
+                self.trackers[name].compensate(homographies[index])
             for local in self.trackers[name].step(detections.take(detections.cameras == index), frames):
                 key = (name, local.track_id)
                 if key not in self._ids:
