@@ -51,11 +51,12 @@ def test_reid_table_shares_are_the_arithmetic_of_a_hand_built_log():
     assert rows["121-240"].same_pairs == 0 and np.isnan(rows["121-240"].auc)
 
 
-RIG = build_rig(RigConfig())
+RIG = build_rig(RigConfig(preset="stereo"))
 
 
 def _sensor_log(settings: dict, seed: int, actors: int = 40, frames: int = 200) -> EmbeddingLog:
-    """Embeddings the sensor model gives ``actors`` cars ahead of the front camera, every frame detected."""
+    """Embeddings the sensor model gives ``actors`` cars 20 m ahead of a stereo pair, every frame detected by both
+    cameras."""
     scenario = Scenario.model_validate({
         "name": "t", "render": {"visibility": False}, "traffic": {"class_mix": {"car": 1.0}},
         "sensor": {"detection": {"probability": 1.0}, "clutter": {"rate_per_frame": 0.0},
@@ -67,21 +68,23 @@ def _sensor_log(settings: dict, seed: int, actors: int = 40, frames: int = 200) 
     model = SensorModel(scenario, RIG, RandomStreams(seed))
     projection = project_boxes(boxes, RIG, ego)
     visibility = Visibility.unmeasured(projection)
+    assert projection.in_view.all()
     vectors = []
     for frame in range(frames):
         state = GroundTruthFrame(frame=frame, timestamp=frame / 10.0, ego=ego, actor_ids=np.arange(actors),
                                  classes=np.full(actors, "car", dtype=object), boxes=boxes)
-        vectors.append(model.observe(state, projection, visibility).batch.embeddings[0].astype(float))
-    return EmbeddingLog(np.zeros(frames * actors, dtype=np.int64), np.repeat(np.arange(frames), actors),
-                        np.zeros(frames * actors, dtype=np.int64), np.tile(np.arange(actors), frames),
+        vectors.append(model.observe(state, projection, visibility).batch.embeddings.astype(float).reshape(-1, 12))
+    rows = frames * 2 * actors  # per frame: camera 0's actors, then camera 1's
+    return EmbeddingLog(np.zeros(rows, dtype=np.int64), np.repeat(np.arange(frames), 2 * actors),
+                        np.tile(np.repeat([0, 1], actors), frames), np.tile(np.arange(actors), 2 * frames),
                         np.concatenate(vectors))
 
 
 TRUE = {"dimension": 12, "sigma": 0.45, "drift_sigma": 0.63, "drift_time_s": 0.73, "slow_drift_sigma": 0.68,
         "slow_drift_time_s": 10.8, "lookalike_weight": 0.3}
 TOLERANCE = {"sigma": 0.10, "drift_sigma": 0.15, "drift_time_s": 0.20, "slow_drift_sigma": 0.25}
-"""Relative tolerances of the round trip (40 cars, 200 frames at 10 Hz); the dimension within ±2 and the slow
-drift's correlation time within a factor 2 (a 20 s log holds two of its 10.8 s)."""
+"""Relative tolerances of the round trip (40 cars seen by two cameras, 200 frames at 10 Hz); the dimension within
+±2 and the slow drift's correlation time within a factor 2 (a 20 s log holds two of its 10.8 s)."""
 
 
 def _check_round_trip(seed: int) -> None:
@@ -120,7 +123,7 @@ def test_fit_command_writes_settings_a_scenario_accepts(tmp_path, capsys):
     table = tomllib.loads((tmp_path / "fit.toml").read_text())["sensor"]
     scenario = Scenario.model_validate({"name": "t", "sensor": table})
     assert scenario.sensor.embedding.dimension == pytest.approx(12, abs=2)
-    assert read_embedding_log(log).embeddings.shape == (30 * 120, 12)
+    assert read_embedding_log(log).embeddings.shape == (2 * 30 * 120, 12)
 
 
 @pytest.mark.parametrize(("case", "expected"), [

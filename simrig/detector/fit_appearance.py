@@ -10,6 +10,10 @@ of occlusion, truncation, range or the side seen, so their effects are folded in
 * from the same-identity pairs of one camera g frames apart, the mean cosine similarity m(g) at every gap of
   :data:`GAPS` with at least :data:`MIN_PAIRS` pairs — which sets ``sigma``, the two drifts' norms and their
   correlation times (at the log's frame rate);
+* from same-identity pairs seen by two cameras at the same frame (when the log has them), the mean cosine
+  similarity — the drifts of two cameras are independent, so this separates the drifts from the identity (a
+  single-camera log cannot tell a slow drift from a lasting appearance: then ``slow_drift_sigma`` and
+  ``slow_drift_time_s`` are poorly determined, and the summary says so);
 * from different-identity pairs of one camera 1–30 frames apart, the mean and the standard deviation of the
   cosine similarity — which set the effective ``dimension``. ``lookalike_weight`` and ``colours`` are given, not
   fitted (default 0.3 and 8, the realistic presets'): they move the different-identity mean by only about
@@ -55,6 +59,9 @@ class Moments:
     different_sd: float
     different_mean_error: float
     different_sd_error: float
+    cross_mean: float | None = None
+    """Mean same-identity cosine of two cameras at one frame (None without such pairs)."""
+    cross_error: float | None = None
 
 
 def read_embedding_log(path: Path | str) -> EmbeddingLog:
@@ -163,8 +170,17 @@ def measured_moments(log: EmbeddingLog, seed: int = 0) -> Moments:
                           f"needs {MIN_PAIRS}")
     sd = different.std(ddof=1)
     n = len(different)
+    cross_mean = cross_error = None
+    same_frame = ((log.sequence * (int(log.identity.max()) + 1) + log.identity) * width + log.frame)
+    order = np.lexsort((log.camera, same_frame))
+    first, second = order[:-1], order[1:]
+    pairs = (same_frame[first] == same_frame[second]) & (log.camera[first] != log.camera[second])
+    if pairs.sum() >= MIN_PAIRS:
+        pick = rng.permutation(np.nonzero(pairs)[0])[:MAX_PAIRS]
+        cosine = np.einsum("pd,pd->p", log.embeddings[first[pick]], log.embeddings[second[pick]])
+        cross_mean, cross_error = float(cosine.mean()), max(float(cosine.std(ddof=1) / np.sqrt(len(pick))), 1e-3)
     return Moments(np.array(gaps), np.array(means), np.array(errors), float(different.mean()), float(sd),
-                   float(sd / np.sqrt(n)), float(sd / np.sqrt(2 * (n - 1))))
+                   float(sd / np.sqrt(n)), float(sd / np.sqrt(2 * (n - 1))), cross_mean, cross_error)
 
 
 def _unit(vectors: np.ndarray) -> np.ndarray:
@@ -188,9 +204,12 @@ class _Simulator:
         self.innovation = rng.standard_normal((len(gaps), 2, m, d)) / np.sqrt(d)
         self.noise = rng.standard_normal((len(gaps), 2, m, d)) / np.sqrt(d)
         self.stranger = rng.standard_normal((3, m, d)) / np.sqrt(d)  # the other actor's two drifts and noise
+        self.other_camera = rng.standard_normal((3, m, d)) / np.sqrt(d)  # another camera's drifts and noise
 
     def moments(self, sigma: float, drifts: np.ndarray, phis: np.ndarray, lookalike: float, period: float
-                ) -> tuple[np.ndarray, float, float]:
+                ) -> tuple[np.ndarray, float, float, float]:
+        """Mean same-identity cosine per gap, different-identity cosine mean and sd, and the mean same-identity
+        cosine of two cameras at one frame."""
         w = lookalike
         first_colour = self.prototype[self.colour]
         other_colour = np.where(self.same_colour[:, None], first_colour,
@@ -209,7 +228,10 @@ class _Simulator:
         other = _unit(stranger + drifts[0] * self.stranger[0] + drifts[1] * self.stranger[1]
                       + sigma * self.stranger[2])
         different = np.einsum("pd,pd->p", first, other)
-        return same, float(different.mean()), float(different.std(ddof=1))
+        elsewhere = _unit(identity + drifts[0] * self.other_camera[0] + drifts[1] * self.other_camera[1]
+                          + sigma * self.other_camera[2])
+        cross = float(np.einsum("pd,pd->p", first, elsewhere).mean())
+        return same, float(different.mean()), float(different.std(ddof=1)), cross
 
 
 @dataclass(frozen=True)
@@ -222,6 +244,7 @@ class AppearanceFit:
     moments: Moments
     fitted_same: np.ndarray
     fitted_different: tuple[float, float]
+    fitted_cross: float
 
 
 def fit_appearance(log: EmbeddingLog, frame_rate_hz: float = 10.0, *, lookalike_weight: float = 0.3,
@@ -279,18 +302,19 @@ def _fit_dimension(moments: Moments, dimension: int, period: float, lookalike: f
         return simulator.moments(sigma, drifts, phis, lookalike, period)
 
     def residuals(x: np.ndarray) -> np.ndarray:
-        same, mean, sd = model(x)
+        same, mean, sd, cross = model(x)
+        cross_residual = [] if moments.cross_mean is None else [(cross - moments.cross_mean) / moments.cross_error]
         return np.concatenate([(same - moments.same_mean) / moments.same_error,
                                [(mean - moments.different_mean) / moments.different_mean_error,
-                                (sd - moments.different_sd) / moments.different_sd_error]])
+                                (sd - moments.different_sd) / moments.different_sd_error], cross_residual])
 
     result = least_squares(residuals, start, method="trf", max_nfev=100)
     sigma, drifts, taus = unpack(result.x)
-    same, mean, sd = model(result.x)
+    same, mean, sd, cross = model(result.x)
     settings = {"dimension": dimension, "sigma": sigma, "drift_sigma": drifts[0], "drift_time_s": taus[0],
                 "slow_drift_sigma": drifts[1], "slow_drift_time_s": taus[1], "lookalike_weight": lookalike}
     return AppearanceFit({k: (v if k == "dimension" else round(float(v), 4)) for k, v in settings.items()},
-                         float(np.sum(result.fun**2)), moments, same, (mean, sd))
+                         float(np.sum(result.fun**2)), moments, same, (mean, sd), cross)
 
 
 def fit_embeddings_to_toml(path: Path, out: Path, frame_rate_hz: float = 10.0, *, lookalike_weight: float = 0.3,
@@ -308,7 +332,11 @@ def fit_embeddings_to_toml(path: Path, out: Path, frame_rate_hz: float = 10.0, *
         f"fitted by simrig detector fit --embeddings {path} ({len(log)} rows, frames at {frame_rate_hz:g} Hz)",
         "occlusion, truncation and range are not in the log: their average effect is in sigma and the drifts, so",
         "occlusion_sigma, truncation_sigma and viewpoint_weight are 0 and distance_scale_m should be left unset",
-        f"misfit {fit.misfit:.1f} over {len(m.gaps) + 2} moments (sum of squared standardised residuals)",
+        f"misfit {fit.misfit:.1f} over {len(m.gaps) + 2 + (m.cross_mean is not None)} moments (sum of squared "
+        "standardised residuals)",
+        *([] if m.cross_mean is not None else [
+            "one camera per identity and frame: a slow drift cannot be told from a lasting look, so slow_drift_sigma",
+            "and slow_drift_time_s are poorly determined (log two cameras seeing the same objects to pin them)"]),
     ]
     text = "".join(f"# {note}\n" for note in notes) + tomli_w.dumps({"sensor": {"embedding": settings}})
     lines = ["gap [frames]  mean cos same (log)  (model)"]
@@ -316,6 +344,9 @@ def fit_embeddings_to_toml(path: Path, out: Path, frame_rate_hz: float = 10.0, *
               for gap, mean, model in zip(m.gaps, m.same_mean, fit.fitted_same, strict=True)]
     lines.append(f"different identities: mean cos {m.different_mean:.3f} (model {fit.fitted_different[0]:.3f}), "
                  f"sd {m.different_sd:.3f} (model {fit.fitted_different[1]:.3f})")
+    if m.cross_mean is not None:
+        lines.append(f"same identity, two cameras, one frame: mean cos {m.cross_mean:.3f} "
+                     f"(model {fit.fitted_cross:.3f})")
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text, encoding="utf-8")
     return "\n".join([format_table(reid_table(log)), "", *lines, "", text, f"written to {out}"])
