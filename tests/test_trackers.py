@@ -276,12 +276,13 @@ def test_mutr3d_associates_in_the_image_and_updates_in_3d_from_every_camera_that
     outputs = _run("mutr3d", frames)
     assert all(len(ts) == 1 for ts in outputs) and len({ts[0].track_id for ts in outputs}) == 1
     assert abs(outputs[-1][0].box3d.x - (25.0 + 19)) < 1.5
-    t = tracker.create("mutr3d")
-    t.reset(rig=RIG)
-    t.step(frames[0])
     near_in_3d = replace(_detection(26.0, 0.0), box=Box2D(0, 0, 40, 30))  # 1 m off in 3D, elsewhere in pixels
     far = SensorFrame(1, DT, EgoPose(0, 0, 0, 0), RIG, {"A": (near_in_3d,), "B": ()})
-    assert [track.track_id for track in t.step(far)] == [2]  # not matched in the image: a new query
+    for cost2d, expected in (("iou", [2]), ("mahalanobis", [1])):  # the image gate: a new query; in 3D: matched
+        t = tracker.create("mutr3d", cost2d=cost2d)
+        t.reset(rig=RIG)
+        t.step(frames[0])
+        assert [track.track_id for track in t.step(far)] == expected, cost2d
 
 
 # -- polymot: the modern filter baseline -------------------------------------------------------------------------
@@ -357,3 +358,30 @@ def test_mutr3d_tracker_keeps_a_query_through_4_low_frames_twice_and_drops_it_at
     assert all(ids == [1] for ids in survived)
     died = scores_run([0.9] + low + [0.2] + [0.9])
     assert died[4] == [1] and died[5] == [] and died[6] == [2]  # gone at the 5th low frame; a new query after
+
+
+def test_mutr3d_keeps_a_far_car_whose_3d_estimate_projects_beside_its_2d_box():
+    """A car 60 m ahead of camera A (yaw 0.3 rad, so along its axis at bearing 0.3) with an accurate pixel box
+    and a monocular 3D estimate steadily 2.5 m to the side: the track, fed by the 3D boxes, projects ~40 px beside
+    the car's ~33 px wide box (IoU < 0.1 every frame, checked below on the projections). Under the image IoU gate no
+    detection ever matches the track and new tracks keep being born; under the 3D Mahalanobis cost (the default)
+    the estimates agree with each other and one track holds."""
+    bearing, distance, offset = 0.3, 60.0, 2.5
+    truth = np.array([distance * np.cos(bearing), distance * np.sin(bearing)])
+    side = np.array([-np.sin(bearing), np.cos(bearing)]) * offset
+    true_box = project_boxes(np.array([[*truth, 0.8, 4.6, 1.9, 1.6, bearing]]), RIG, EgoPose(0, 0, 0, 0)).boxes[0, 0]
+    estimate_box = project_boxes(np.array([[*(truth + side), 0.8, 4.6, 1.9, 1.6, bearing]]), RIG,
+                                 EgoPose(0, 0, 0, 0)).boxes[0, 0]
+    overlap = max(0.0, min(true_box[2], estimate_box[2]) - max(true_box[0], estimate_box[0]))
+    widths = true_box[2] - true_box[0], estimate_box[2] - estimate_box[0]
+    assert overlap / (sum(widths) - overlap) < 0.1  # the two boxes (same height) overlap by IoU < 0.1
+    frames = []
+    for k in range(12):
+        x, y = truth + side
+        detection = Detection(Box2D(*map(float, true_box)), 0.9, ActorClass.CAR,
+                              Box3D(float(x), float(y), 0.8, 4.6, 1.9, 1.6, bearing, 0.0, 0.0))
+        frames.append(SensorFrame(k, k * DT, EgoPose(0, 0, 0, 0), RIG, {"A": (detection,), "B": ()}))
+    default = {track.track_id for tracks in _run("mutr3d", frames) for track in tracks}
+    image_gate = {track.track_id for tracks in _run("mutr3d", frames, cost2d="iou") for track in tracks}
+    assert default == {1}
+    assert len(image_gate) > 1
