@@ -191,6 +191,19 @@ def test_report_shows_the_tables(smoke_local, tmp_path):
     for image in ("curves-miss_probability.png", "curves-rig_overlap_deg.png", "worst-bev.png", "worst-mosaic.png",
                   "curves-miss_probability-by-scenario.png"):
         assert f"]({image})" in text and (tmp_path / "report" / image).stat().st_size > 10_000
+    # paired against the group's first tracker per (scenario, seed): the mean difference, then its interval
+    pairs = base.pivot_table(index=["scenario", "seed"], columns="tracker", values=["2d_HOTA", "3d_IDS"])
+    delta_hota = (pairs["2d_HOTA"]["global_hungarian"] - pairs["2d_HOTA"]["saga"]).to_numpy()
+    delta_ids = (pairs["3d_IDS"]["global_hungarian"] - pairs["3d_IDS"]["saga"]).to_numpy()
+    assert "Paired against `saga`" in text
+    row = next(line for line in text.splitlines() if line.startswith("| `global_hungarian` | 4 | "))
+    cells = [cell.strip() for cell in row.split("|")[1:-1]]
+    assert cells[2].startswith(f"{delta_hota.mean():+.3f} [") and cells[5].startswith(f"{delta_ids.mean():+.1f} [")
+    for cell in cells[2:]:
+        low, high = (float(v) for v in cell.split("[")[1].split("]")[0].split(","))
+        assert low <= float(cell.split()[0]) <= high, cell
+        if 0.0 not in (low, high):  # a bound printed as ±0 can lie on either side of 0
+            assert cell.endswith("n.s.") == (low < 0 < high), cell
     saga = rows[rows["tracker"] == "saga"].drop_duplicates("cell")
     worst = saga.sort_values(["3d_IDS", "2d_HOTA"], ascending=[False, True]).iloc[0]
     assert f"(cell `{worst['cell']}`)" in text
