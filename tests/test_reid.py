@@ -126,6 +126,16 @@ def test_fit_command_writes_settings_a_scenario_accepts(tmp_path, capsys):
     assert read_embedding_log(log).embeddings.shape == (2 * 30 * 120, 12)
 
 
+def test_a_small_log_still_gives_settings_within_the_schema(tmp_path, capsys):
+    """Five identities over 30 frames: the fit is poor, says so, and writes settings a scenario accepts."""
+    log = _write_log(tmp_path / "small.parquet", _sensor_log(TRUE, 4, actors=5, frames=30))
+    assert main(["detector", "fit", "--embeddings", str(log), "--out", str(tmp_path / "fit.toml")]) == 0
+    assert "WARNING: only 5 identities" in capsys.readouterr().out
+    import tomllib
+
+    Scenario.model_validate({"name": "t", "sensor": tomllib.loads((tmp_path / "fit.toml").read_text())["sensor"]})
+
+
 @pytest.mark.parametrize(("case", "expected"), [
     ("dimensions", "column embedding: row 0 has 12 values but row 7 has 11; one length expected"),
     ("nan", "column embedding: row 3 holds NaN or infinity"),

@@ -198,3 +198,11 @@ def test_botsort_compensates_the_ego_turning_from_the_known_ego_motion():
     assert ids_in(run("botsort", frames)) == [[1]] * len(yaws)
     plain = ids_in(run("botsort", frames, motion_compensation=False))
     assert plain[3] == [1] and plain[-1] not in ([], [1])
+
+
+@pytest.mark.parametrize(("params", "message"), [({"motion_compensation": "maybe"}, "motion_compensation"),
+                                                  ({"track_buffer": 2.5}, "track_buffer"),
+                                                  ({"appearance_thresh": 2.0}, "appearance_thresh")])
+def test_botsort_refuses_settings_it_cannot_use(params, message):
+    with pytest.raises(ValueError, match=message):
+        tracker.create("botsort", **params).reset(rig=STEREO)

@@ -147,8 +147,9 @@ class BotSort:
                             ("appearance_thresh", appearance_thresh), ("alpha", alpha)):
             if not 0 <= value <= 1:
                 raise ValueError(f"botsort: {name} must be in [0, 1], got {value}")
-        if track_buffer < 1:
-            raise ValueError(f"botsort: track_buffer must be ≥ 1, got {track_buffer}")
+        if isinstance(track_buffer, bool) or not float(track_buffer).is_integer() or track_buffer < 1:
+            raise ValueError(f"botsort: track_buffer must be a whole number of frames ≥ 1, got {track_buffer}")
+        track_buffer = int(track_buffer)
         self.high, self.low, self.new = track_high_thresh, track_low_thresh, new_track_thresh
         self.match_thresh, self.proximity, self.appearance = match_thresh, proximity_thresh, appearance_thresh
         self.track_buffer, self.alpha = track_buffer, alpha
@@ -239,6 +240,8 @@ def botsort(*, track_high_thresh: float = 0.6, track_low_thresh: float = 0.1, ne
             cameras: str = "") -> PerCameraTracking:
     """BoT-SORT-style tracking on every camera of the rig (or on the comma-separated ``cameras``), each camera on
     its own, with camera-motion compensation from the ego motion unless ``motion_compensation`` is off."""
+    if motion_compensation not in (True, False):  # 1 and 0 compare equal to them
+        raise ValueError(f"botsort: motion_compensation must be true or false (or 1 / 0), got {motion_compensation!r}")
     return PerCameraTracking(
         lambda: BotSort(track_high_thresh=track_high_thresh, track_low_thresh=track_low_thresh,
                         new_track_thresh=new_track_thresh, match_thresh=match_thresh,

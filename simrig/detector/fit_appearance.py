@@ -44,6 +44,10 @@ MAX_PAIRS = 5000
 """Pairs sampled per gap and for the different-identity moments."""
 SIMULATED_PAIRS = 3000
 COLUMNS = ("frame", "camera", "identity", "embedding")
+MAX_NORM, MAX_TIME_S = 10.0, 3600.0
+"""The schema's bounds on the drifts' and noise's norms and on the correlation times [s]."""
+POOR_FIT = 9.0
+"""Mean squared standardised residual above which the summary warns that the model does not fit the log."""
 FITTED = ("dimension", "sigma", "drift_sigma", "drift_time_s", "slow_drift_sigma", "slow_drift_time_s")
 
 
@@ -291,9 +295,10 @@ def _fit_dimension(moments: Moments, dimension: int, period: float, lookalike: f
     simulator = _Simulator(dimension, moments.gaps, colours)
 
     def unpack(x: np.ndarray) -> tuple:
-        sigma, fast, slow = np.exp(x[:3])
-        tau_fast = np.exp(x[3])
-        tau_slow = tau_fast + np.exp(x[4])
+        """Settings within the schema's bounds (norms ≤ 10, correlation times ≤ 3600 s, the slow one the longer)."""
+        sigma, fast, slow = np.minimum(np.exp(x[:3]), MAX_NORM)
+        tau_fast = min(float(np.exp(x[3])), MAX_TIME_S)
+        tau_slow = min(tau_fast + float(np.exp(x[4])), MAX_TIME_S)
         return sigma, np.array([fast, slow]), np.array([tau_fast, tau_slow])
 
     def model(x: np.ndarray) -> tuple:
@@ -324,22 +329,33 @@ def fit_embeddings_to_toml(path: Path, out: Path, frame_rate_hz: float = 10.0, *
     import tomli_w
 
     log = read_embedding_log(path)
-    fit = fit_appearance(log, frame_rate_hz, lookalike_weight=lookalike_weight, colours=colours)
+    try:
+        fit = fit_appearance(log, frame_rate_hz, lookalike_weight=lookalike_weight, colours=colours)
+    except SimrigError as error:
+        raise SimrigError(f"{path}: {error}") from None
     m = fit.moments
     settings = {**fit.settings, "colours": colours, "viewpoint_weight": 0.0, "occlusion_sigma": 0.0,
                 "truncation_sigma": 0.0}
     notes = [
         f"fitted by simrig detector fit --embeddings {path} ({len(log)} rows, frames at {frame_rate_hz:g} Hz)",
         "occlusion, truncation and range are not in the log: their average effect is in sigma and the drifts, so",
-        "occlusion_sigma, truncation_sigma and viewpoint_weight are 0 and distance_scale_m should be left unset",
-        f"misfit {fit.misfit:.1f} over {len(m.gaps) + 2 + (m.cross_mean is not None)} moments (sum of squared "
-        "standardised residuals)",
+        "occlusion_sigma, truncation_sigma and viewpoint_weight are 0; a scenario extending a preset keeps the",
+        "preset's distance_scale_m (noise growing with range on top of the log's average)",
+        f"misfit {fit.misfit:.1f} over {moments_count(m)} moments (sum of squared standardised residuals)",
+        *([] if fit.misfit <= POOR_FIT * moments_count(m) else [
+            f"WARNING: the model does not fit this log well (misfit {fit.misfit / moments_count(m):.0f} per moment;"
+            " a good fit is near 1): compare the tables above before using these settings"]),
+        *([] if fit.settings["slow_drift_time_s"] < MAX_TIME_S else [
+            f"slow_drift_time_s is at the schema's bound {MAX_TIME_S:g} s: the log shows no end to the slow drift's "
+            "memory"]),
+        *([] if len(np.unique(log.identity)) >= 10 else [
+            f"WARNING: only {len(np.unique(log.identity))} identities: the different-identity moments are unreliable"]),
         *([] if m.cross_mean is not None else [
             "one camera per identity and frame: a slow drift cannot be told from a lasting look, so slow_drift_sigma",
             "and slow_drift_time_s are poorly determined (log two cameras seeing the same objects to pin them)"]),
     ]
     text = "".join(f"# {note}\n" for note in notes) + tomli_w.dumps({"sensor": {"embedding": settings}})
-    lines = ["gap [frames]  mean cos same (log)  (model)"]
+    lines = ["gap [frames]  mean cos same (this log)  (fitted model)"]
     lines += [f"{gap:>12}  {mean:>19.3f}  {model:>7.3f}"
               for gap, mean, model in zip(m.gaps, m.same_mean, fit.fitted_same, strict=True)]
     lines.append(f"different identities: mean cos {m.different_mean:.3f} (model {fit.fitted_different[0]:.3f}), "
@@ -349,4 +365,10 @@ def fit_embeddings_to_toml(path: Path, out: Path, frame_rate_hz: float = 10.0, *
                      f"(model {fit.fitted_cross:.3f})")
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text, encoding="utf-8")
-    return "\n".join([format_table(reid_table(log)), "", *lines, "", text, f"written to {out}"])
+    return "\n".join(["the log's re-ID table (left) beside the source's (right):", format_table(reid_table(log)), "",
+                      *lines, "", text, f"written to {out}"])
+
+
+def moments_count(moments: Moments) -> int:
+    """How many moments the fit matched."""
+    return len(moments.gaps) + 2 + (moments.cross_mean is not None)

@@ -241,7 +241,7 @@ def format_table(rows: list[ReidRow]) -> str:
         source = SOURCE.get(row.gaps)
         pooled = SOURCE_POOLED.get(row.gaps)
         beside = (f"{_percent(source[1])}   {_percent(source[2])}   {source[0]:.3f}" if source else
-                  f"{_percent(pooled[0])}   {_percent(pooled[2])}       -" if pooled else "")
+                  f"{_percent(pooled[0])}   {_percent(pooled[2])}       -" if pooled else "  (not in the source)")
         auc = f"{row.auc:.3f}" if np.isfinite(row.auc) else "    -"
         lines.append(f"{row.gaps:<24} {row.same_pairs:>5}/{row.different_pairs:<5}  "
                      f"{_percent(row.same_below[0])}   {_percent(row.same_below[1])}  "
