@@ -12,6 +12,20 @@ from scipy.optimize import linear_sum_assignment
 UNMATCHED = -1
 
 
+def assign_into(owner: np.ndarray, rows: np.ndarray, tracks, cost: np.ndarray, gate: float) -> None:
+    """:func:`hungarian` on ``cost`` ``(len(tracks), len(rows))``; each detection row it matches gets its track's
+    index (from ``tracks``) written into ``owner``.
+
+    >>> owner = np.full(3, UNMATCHED)
+    >>> assign_into(owner, np.array([0, 2]), [5, 7], np.array([[0.1, 0.9], [0.9, 0.2]]), 0.5)
+    >>> owner.tolist()
+    [5, -1, 7]
+    """
+    matched = hungarian(cost, gate)
+    hit = matched != UNMATCHED
+    owner[rows[hit]] = np.asarray(tracks)[matched[hit]]
+
+
 def hungarian(cost: np.ndarray, gate: float) -> np.ndarray:
     """Minimum-cost one-to-one matching (scipy's ``linear_sum_assignment``) where leaving a track or a
     detection unmatched costs ``gate``/2 each, so a pair is worth matching only if its cost is below the gate

@@ -32,7 +32,7 @@ from filterpy.kalman import KalmanFilter
 from simrig.geometry import camera_from_world
 from simrig.types import EgoPose, Rig
 
-from .assignment import UNMATCHED, hungarian
+from .assignment import UNMATCHED, assign_into
 from .boxes2d import iou
 from .camera_tracking import LocalTrack, PerCameraTracking
 from .detections import DetectionArrays
@@ -187,9 +187,7 @@ class BotSort:
                owner: np.ndarray, *, fused: bool) -> None:
         if not track_indices or len(rows) == 0:
             return
-        matched = hungarian(self._cost(track_indices, rows, detections, fused=fused), gate)
-        hit = matched != UNMATCHED
-        owner[rows[hit]] = np.asarray(track_indices)[matched[hit]]
+        assign_into(owner, rows, track_indices, self._cost(track_indices, rows, detections, fused=fused), gate)
 
     def step(self, detections: DetectionArrays, frames: int = 1) -> list[LocalTrack]:
         for _ in range(frames):

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .assignment import UNMATCHED, hungarian
+from .assignment import UNMATCHED, assign_into
 from .boxes2d import iou
 from .camera_tracking import LocalTrack, PerCameraTracking
 from .deepsort import DeepSortTrack, xyah_to_box
@@ -68,9 +68,7 @@ class ByteTrack:
         cost = 1.0 - iou(predicted, detections.boxes2d[rows])
         labels = np.array([self.tracks[i].label for i in track_indices])
         cost = np.where(labels[:, None] == detections.labels[rows][None, :], cost, np.inf)
-        matched = hungarian(cost, gate)
-        hit = matched != UNMATCHED
-        owner[rows[hit]] = np.asarray(track_indices)[matched[hit]]
+        assign_into(owner, rows, track_indices, cost, gate)
 
     def step(self, detections: DetectionArrays, frames: int = 1) -> list[LocalTrack]:
         for _ in range(frames):
