@@ -168,3 +168,12 @@ def test_bad_embedding_logs_are_one_line(case, expected, tmp_path, capsys):
     assert code == 2 and len(lines) == 1 and lines[0].startswith("simrig: error: "), lines
     assert expected in lines[0] and path.name in lines[0], lines[0]
     assert not (tmp_path / "fit.toml").exists()
+
+
+def test_fit_refuses_to_write_over_its_own_log(tmp_path, capsys):
+    log = _write_log(tmp_path / "log.parquet", _sensor_log(TRUE, 0, actors=4, frames=10))
+    before = log.read_bytes()
+    code = main(["detector", "fit", "--embeddings", str(log), "--out", str(log)])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "--out" in lines[0] and "input" in lines[0], lines
+    assert log.read_bytes() == before

@@ -10,9 +10,12 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     import json
     from dataclasses import asdict
 
+    from ..dataset.outputs import check_output_path
     from .measure import measure, pooled_reid
     from .reid import format_table
 
+    if args.json is not None:  # checked before any work, as every command's outputs are
+        check_output_path(args.json, what="--json", inputs=args.dataset, folder=False)
     results = [measure(path) for path in args.dataset]
     print("\n\n".join(result.table() for result in results))
     pooled = pooled_reid(args.dataset) if len(results) > 1 else None
@@ -30,8 +33,12 @@ def _cmd_measure(args: argparse.Namespace) -> int:
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
+    from ..dataset.outputs import check_output_path
     from ..errors import SimrigError
 
+    # the input files must not be overwritten (a folder input may hold the output: a data root, say)
+    files = [path for path in (args.embeddings, args.detections, args.truth) if path is not None and path.is_file()]
+    check_output_path(args.out, what="--out", inputs=files, folder=False)
     if args.embeddings is not None:
         from .fit_appearance import fit_embeddings_to_toml
 

@@ -34,7 +34,15 @@ import numpy as np
 
 from ..errors import SimrigError
 from ..sensor.processes import ar1_coefficient
-from .reid import EmbeddingLog, format_table, reid_table
+from .reid import (
+    EmbeddingLog,
+    cross_camera_pairs,
+    different_identity_pairs,
+    format_table,
+    reid_table,
+    same_identity_pairs,
+    within_sequences,
+)
 
 GAPS = (1, 2, 3, 4, 6, 8, 11, 15, 20, 27, 36, 48, 64, 85, 113, 150, 200, 240)
 """[frames] gaps whose mean same-identity cosine is matched."""
@@ -134,55 +142,33 @@ def _codes(column, path: Path, name: str) -> np.ndarray:
 def measured_moments(log: EmbeddingLog, seed: int = 0) -> Moments:
     """The moments of ``log`` (see the module docstring)."""
     rng = np.random.default_rng(seed)
-    width = int(log.frame.max()) + max(GAPS) + 2
-    cameras = int(log.camera.max()) + 1
-    key = ((log.sequence * (int(log.identity.max()) + 1) + log.identity) * cameras + log.camera) * width + log.frame
-    order = np.argsort(key, kind="stable")
-    sorted_key = key[order]
+    camera, identity = within_sequences(log)
+
+    def cosines(pairs: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+        pick = rng.permutation(len(pairs[0]))[:MAX_PAIRS]
+        return np.einsum("pd,pd->p", log.embeddings[pairs[0][pick]], log.embeddings[pairs[1][pick]])
+
     gaps, means, errors = [], [], []
     for gap in GAPS:
-        at = np.minimum(np.searchsorted(sorted_key, key + gap), len(key) - 1)
-        first = np.nonzero(sorted_key[at] == key + gap)[0]
-        if len(first) < MIN_PAIRS:
+        cosine = cosines(same_identity_pairs(log.frame, camera, identity, gap, gap, rng))
+        if len(cosine) < MIN_PAIRS:
             continue
-        first = rng.permutation(first)[:MAX_PAIRS]
-        cosine = np.einsum("pd,pd->p", log.embeddings[first], log.embeddings[order[at[first]]])
         gaps.append(gap)
         means.append(cosine.mean())
         errors.append(max(cosine.std(ddof=1) / np.sqrt(len(cosine)), 1e-3))
     if len(gaps) < 3:
         raise SimrigError(f"only {len(gaps)} frame gap(s) with {MIN_PAIRS} or more same-identity pairs in one camera; "
                           "the fit needs at least 3 (log each identity over more consecutive frames)")
-    group = (log.sequence * cameras + log.camera) * width + log.frame
-    group_order = np.argsort(group, kind="stable")
-    cosines = []
-    for _ in range(20):
-        anchor = rng.integers(len(key), size=4 * MAX_PAIRS)
-        target = group[anchor] + rng.integers(1, 31, size=len(anchor))
-        start = np.searchsorted(group[group_order], target, side="left")
-        stop = np.searchsorted(group[group_order], target, side="right")
-        some = stop > start
-        partner = group_order[start[some] + (rng.random(int(some.sum())) * (stop - start)[some]).astype(np.int64)]
-        anchor = anchor[some]
-        keep = (log.identity[partner] != log.identity[anchor]) | (log.sequence[partner] != log.sequence[anchor])
-        cosines.append(np.einsum("pd,pd->p", log.embeddings[anchor[keep]], log.embeddings[partner[keep]]))
-        if sum(map(len, cosines)) >= MAX_PAIRS:
-            break
-    different = np.concatenate(cosines)[:MAX_PAIRS]
+    different = cosines(different_identity_pairs(log.frame, camera, identity, 1, 30, MAX_PAIRS, rng))
     if len(different) < MIN_PAIRS:
         raise SimrigError(f"only {len(different)} different-identity pairs 1–30 frames apart in one camera; the fit "
                           f"needs {MIN_PAIRS}")
     sd = different.std(ddof=1)
     n = len(different)
     cross_mean = cross_error = None
-    same_frame = ((log.sequence * (int(log.identity.max()) + 1) + log.identity) * width + log.frame)
-    order = np.lexsort((log.camera, same_frame))
-    first, second = order[:-1], order[1:]
-    pairs = (same_frame[first] == same_frame[second]) & (log.camera[first] != log.camera[second])
-    if pairs.sum() >= MIN_PAIRS:
-        pick = rng.permutation(np.nonzero(pairs)[0])[:MAX_PAIRS]
-        cosine = np.einsum("pd,pd->p", log.embeddings[first[pick]], log.embeddings[second[pick]])
-        cross_mean, cross_error = float(cosine.mean()), max(float(cosine.std(ddof=1) / np.sqrt(len(pick))), 1e-3)
+    cross = cosines(cross_camera_pairs(log.frame, camera, identity))
+    if len(cross) >= MIN_PAIRS:
+        cross_mean, cross_error = float(cross.mean()), max(float(cross.std(ddof=1) / np.sqrt(len(cross))), 1e-3)
     return Moments(np.array(gaps), np.array(means), np.array(errors), float(different.mean()), float(sd),
                    float(sd / np.sqrt(n)), float(sd / np.sqrt(2 * (n - 1))), cross_mean, cross_error)
 

@@ -79,7 +79,7 @@ def distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return 0.5 * (1.0 - np.einsum("pd,pd->p", a, b))
 
 
-def _same_pairs(frame, camera, identity, low, high, rng) -> tuple[np.ndarray, np.ndarray]:
+def same_identity_pairs(frame, camera, identity, low, high, rng) -> tuple[np.ndarray, np.ndarray]:
     """Rows (a, b) of one identity and camera with frame[b] − frame[a] in [low, high] (uniform over those that
     exist, from a sample of anchors)."""
     if not len(frame):
@@ -115,7 +115,7 @@ def _other_pairs(group: np.ndarray, identity: np.ndarray, camera: np.ndarray, ta
     return anchors[keep], partner[keep]
 
 
-def _different_pairs(frame, camera, identity, low, high, count, rng) -> tuple[np.ndarray, np.ndarray]:
+def different_identity_pairs(frame, camera, identity, low, high, count, rng) -> tuple[np.ndarray, np.ndarray]:
     """Up to ``count`` rows (a, b) of two identities seen by one camera, frame[b] − frame[a] uniform in
     [low, high]."""
     if not len(frame):
@@ -135,11 +135,10 @@ def _different_pairs(frame, camera, identity, low, high, count, rng) -> tuple[np
     return np.concatenate(firsts)[:count], np.concatenate(seconds)[:count]
 
 
-def _cross_camera_pairs(frame, camera, identity, count, rng) -> tuple[tuple, tuple]:
-    """Same-frame pairs seen by two cameras: of one identity (all that exist, then sampled) and of two."""
+def cross_camera_pairs(frame, camera, identity) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair of rows of one identity seen by two cameras at the same frame."""
     if not len(frame):
-        empty = np.empty(0, dtype=np.int64)
-        return (empty, empty), (empty, empty)
+        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
     key = identity * (int(frame.max()) + 1) + frame
     order = np.lexsort((camera, key))
     firsts, seconds = [], []
@@ -148,11 +147,25 @@ def _cross_camera_pairs(frame, camera, identity, count, rng) -> tuple[tuple, tup
         keep = (key[a] == key[b]) & (camera[a] != camera[b])
         firsts.append(a[keep])
         seconds.append(b[keep])
-    same = (np.concatenate(firsts), np.concatenate(seconds)) if firsts else (np.empty(0, int), np.empty(0, int))
-    pick = rng.permutation(len(same[0]))[:count]
+    if not firsts:
+        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
+    return np.concatenate(firsts), np.concatenate(seconds)
+
+
+def _cross_camera_strangers(frame, camera, identity, count, rng) -> tuple[np.ndarray, np.ndarray]:
+    """Up to ``count`` pairs of rows of two identities seen by two cameras at the same frame."""
+    if not len(frame):
+        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
     anchors = rng.integers(len(frame), size=4 * count)
-    different = _other_pairs(frame, identity, camera, frame[anchors], anchors, rng, other_camera=True)
-    return (same[0][pick], same[1][pick]), (different[0][:count], different[1][:count])
+    a, b = _other_pairs(frame, identity, camera, frame[anchors], anchors, rng, other_camera=True)
+    return a[:count], b[:count]
+
+
+def within_sequences(log: EmbeddingLog) -> tuple[np.ndarray, np.ndarray]:
+    """(camera, identity) codes made unique per sequence, so that no pair the samplers above draw crosses
+    sequences (pairs are within one camera or of one identity)."""
+    cameras, identities = int(log.camera.max()) + 1, int(log.identity.max()) + 1
+    return log.sequence * cameras + log.camera, log.sequence * identities + log.identity
 
 
 @dataclass(frozen=True)
@@ -203,17 +216,19 @@ def reid_table(log: EmbeddingLog, *, seed: int = 0) -> list[ReidRow]:
         same, different = [], []
         for rows_of in sequences:
             frame, camera, identity = log.frame[rows_of], log.camera[rows_of], log.identity[rows_of]
-            a, b = _same_pairs(frame, camera, identity, low, high, rng)
+            a, b = same_identity_pairs(frame, camera, identity, low, high, rng)
             same.append((rows_of[a], rows_of[b]))
-            a, b = _different_pairs(frame, camera, identity, low, high, DIFFERENT_PAIRS, rng)
+            a, b = different_identity_pairs(frame, camera, identity, low, high, DIFFERENT_PAIRS, rng)
             different.append((rows_of[a], rows_of[b]))
         rows.append(_row(log, f"{low}" if low == high else f"{low}-{high}", _split_sample(same, SAME_PAIRS, rng),
                          _split_sample(different, DIFFERENT_PAIRS, rng)))
     same, different = [], []
     for rows_of in sequences:
-        (a, b), (c, d) = _cross_camera_pairs(log.frame[rows_of], log.camera[rows_of], log.identity[rows_of],
-                                             DIFFERENT_PAIRS, rng)
-        same.append((rows_of[a], rows_of[b]))
+        frame, camera, identity = log.frame[rows_of], log.camera[rows_of], log.identity[rows_of]
+        a, b = cross_camera_pairs(frame, camera, identity)
+        pick = rng.permutation(len(a))[:SAME_PAIRS]
+        same.append((rows_of[a[pick]], rows_of[b[pick]]))
+        c, d = _cross_camera_strangers(frame, camera, identity, DIFFERENT_PAIRS, rng)
         different.append((rows_of[c], rows_of[d]))
     rows.append(_row(log, CROSS_CAMERA, _split_sample(same, SAME_PAIRS, rng),
                      _split_sample(different, DIFFERENT_PAIRS, rng)))
