@@ -4,6 +4,7 @@ logs and from the settings the data was generated with."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -143,6 +144,7 @@ def test_a_small_log_still_gives_settings_within_the_schema(tmp_path, capsys):
     ("zero", "column embedding: row 5 is all zeros"),
     ("missing-column", "missing column(s) identity"),
     ("not-parquet", "not a Parquet table"),
+    ("fifo", "not a regular file"),
 ])
 def test_bad_embedding_logs_are_one_line(case, expected, tmp_path, capsys):
     log = _sensor_log(TRUE, 0, actors=4, frames=10)
@@ -159,6 +161,8 @@ def test_bad_embedding_logs_are_one_line(case, expected, tmp_path, capsys):
         _write_log(path, log, vectors)
     elif case == "one-identity":
         _write_log(path, log, identity=np.zeros(len(log), dtype=np.int64))
+    elif case == "fifo":
+        os.mkfifo(path)
     elif case == "missing-column":
         pq.write_table(pa.table({"frame": log.frame, "camera": log.camera, "embedding": vectors}), path)
     else:
@@ -177,3 +181,14 @@ def test_fit_refuses_to_write_over_its_own_log(tmp_path, capsys):
     lines = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(lines) == 1 and "--out" in lines[0] and "input" in lines[0], lines
     assert log.read_bytes() == before
+
+
+def test_fit_never_writes_through_a_symbolic_link(tmp_path, capsys):
+    log = _write_log(tmp_path / "log.parquet", _sensor_log(TRUE, 0, actors=4, frames=10))
+    victim = tmp_path / "victim.txt"
+    victim.write_text("mine")
+    (tmp_path / "link.toml").symlink_to(victim)
+    code = main(["detector", "fit", "--embeddings", str(log), "--out", str(tmp_path / "link.toml")])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "symbolic link" in lines[0], lines
+    assert victim.read_text() == "mine"

@@ -6,16 +6,25 @@ import argparse
 from pathlib import Path
 
 
+def _file_output(path: Path, what: str, inputs) -> None:
+    """``path`` checked as a file output before any work; a symbolic link is refused (no write follows one)."""
+    from ..dataset.outputs import check_output_path
+    from ..errors import SimrigError
+
+    if path.is_symlink():
+        raise SimrigError(f"{what} {str(path)!r} is a symbolic link; simrig does not write through links")
+    check_output_path(path, what=what, inputs=inputs, folder=False)
+
+
 def _cmd_measure(args: argparse.Namespace) -> int:
     import json
     from dataclasses import asdict
 
-    from ..dataset.outputs import check_output_path
     from .measure import measure, pooled_reid
     from .reid import format_table
 
     if args.json is not None:  # checked before any work, as every command's outputs are
-        check_output_path(args.json, what="--json", inputs=args.dataset, folder=False)
+        _file_output(args.json, "--json", args.dataset)
     results = [measure(path) for path in args.dataset]
     print("\n\n".join(result.table() for result in results))
     pooled = pooled_reid(args.dataset) if len(results) > 1 else None
@@ -33,12 +42,11 @@ def _cmd_measure(args: argparse.Namespace) -> int:
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
-    from ..dataset.outputs import check_output_path
     from ..errors import SimrigError
 
     # the input files must not be overwritten (a folder input may hold the output: a data root, say)
     files = [path for path in (args.embeddings, args.detections, args.truth) if path is not None and path.is_file()]
-    check_output_path(args.out, what="--out", inputs=files, folder=False)
+    _file_output(args.out, "--out", files)
     if args.embeddings is not None:
         from .fit_appearance import fit_embeddings_to_toml
 

@@ -83,6 +83,9 @@ def read_embedding_log(path: Path | str) -> EmbeddingLog:
     import pyarrow.parquet as pq
 
     path = Path(path)
+    if path.exists() and not path.is_file():
+        raise SimrigError(f"--embeddings {str(path)!r}: not a regular file (a folder, a FIFO or a device); a Parquet "
+                          f"table with columns {', '.join(COLUMNS)} expected")
     if not path.is_file():
         raise SimrigError(f"--embeddings {str(path)!r}: no such file (a Parquet table with columns "
                           f"{', '.join(COLUMNS)})")
