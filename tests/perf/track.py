@@ -39,7 +39,7 @@ from simrig.trackers.motion import KalmanConfig, innovation_covariances, new_fil
 from simrig import trackers as tracker
 
 RIG_TRACKERS = ("saga", "global_hungarian", "percam_merge", "simpletrack", "mutr3d", "polymot", "sort", "deepsort",
-                "bytetrack")
+                "bytetrack", "botsort")
 """The trackers that run on any rig (``collabmot`` needs a stereo pair: ``tests/perf/collabmot.py``)."""
 
 
