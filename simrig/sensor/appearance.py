@@ -87,8 +87,7 @@ class Embeddings:
         self._actors: dict[int, tuple[np.ndarray, int, np.ndarray]] = {}
         self._lookalike: dict[tuple[str, int], np.ndarray] = {}
         self._appearance: dict[tuple[int, int], np.ndarray] = {}  # (actor id, side) → appearance
-        self._generators: dict[int, np.random.Generator] = {}
-        self._drift_generators: dict[int, np.random.Generator] = {}
+        self._generators: dict[tuple[int, int], np.random.Generator] = {}
         self.drift_scales = np.array([config.drift_sigma, config.slow_drift_sigma])
         self.drift_phi = np.array([ar1_coefficient(period_s, config.drift_time_s),
                                    ar1_coefficient(period_s, config.slow_drift_time_s)])
@@ -183,25 +182,24 @@ class Embeddings:
         return 0.5 * (low + high)
 
     # ------------------------------------------------------------------ the effect
+    def _camera_stream(self, key: int, camera_index: int) -> np.random.Generator:
+        """Camera ``camera_index``'s generator of the sensor stream ``key`` (made once)."""
+        if (key, camera_index) not in self._generators:
+            self._generators[key, camera_index] = self._streams.generator("sensor", key, camera_index)
+        return self._generators[key, camera_index]
+
     def rng(self, camera_index: int) -> np.random.Generator:
-        if camera_index not in self._generators:
-            self._generators[camera_index] = self._streams.generator("sensor", _NOISE_STREAM, camera_index)
-        return self._generators[camera_index]
+        return self._camera_stream(_NOISE_STREAM, camera_index)
 
     def drift(self, batch: SensorBatch) -> np.ndarray | None:
         """The drifts s_f·x_f + s_s·x_s ``(C, N, D)`` of every camera's actors at this frame, advanced one frame
         (None when both are off). Each camera draws 2·N·D normals from its own drift stream."""
         if self._drift is None:
             return None
-        n, d = len(batch), self.config.dimension
-        if camera_count := len(batch.cameras):
-            for index in range(camera_count):
-                if index not in self._drift_generators:
-                    self._drift_generators[index] = self._streams.generator("sensor", _DRIFT_STREAM, index)
-            z = np.stack([self._drift_generators[index].standard_normal((n, 2 * d)) for index in range(camera_count)],
-                         axis=1)  # (N, C, 2D)
-        else:
-            z = np.empty((n, 0, 2 * d))
+        n, d, camera_count = len(batch), self.config.dimension, len(batch.cameras)
+        z = np.empty((n, camera_count, 2 * d))  # (N, C, 2D)
+        for index in range(camera_count):
+            z[:, index] = self._camera_stream(_DRIFT_STREAM, index).standard_normal((n, 2 * d))
         state = self._drift.step(batch.actor_ids, z).reshape(n, camera_count, 2, d) / np.sqrt(d)
         return np.einsum("ncjd,j->cnd", state, self.drift_scales)
 
