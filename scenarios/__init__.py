@@ -92,10 +92,16 @@ def _resolve(path: Path, chain: tuple[Path, ...]) -> dict[str, Any]:
     return _merge(base, raw)
 
 
+MAX_ERRORS_LISTED = 10
+"""Validation errors named in one message; the rest are counted."""
+
+
 def describe_errors(error: ValidationError) -> str:
-    """One line per pydantic error folded into one line: 'key.path: message'."""
+    """One line per pydantic error folded into one line: 'key.path: message' (the first
+    :data:`MAX_ERRORS_LISTED`, then how many more)."""
     parts = []
-    for item in error.errors():
+    items = error.errors()
+    for item in items[:MAX_ERRORS_LISTED]:
         key = ".".join(str(part) for part in item["loc"]) or "(top level)"
         message = item["msg"]
         if item["type"] == "extra_forbidden":
@@ -107,6 +113,8 @@ def describe_errors(error: ValidationError) -> str:
                 prefix = "" if key == "(top level)" else key + "."
                 key, message = prefix + named.group(1), named.group(2)
         parts.append(f"{key}: {message}")
+    if len(items) > MAX_ERRORS_LISTED:
+        parts.append(f"and {len(items) - MAX_ERRORS_LISTED:,} more")
     return "; ".join(parts)
 
 

@@ -4,11 +4,24 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field
+
+from simrig.names import name_problem
 
 PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 NonNegativeFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+
+
+def _path_name(name: str) -> str:
+    problem = name_problem(name)
+    if problem is not None:
+        raise ValueError(f"{name!r} {problem} (the name becomes a file or folder name)")
+    return name
+
+
+PathName = Annotated[str, AfterValidator(_path_name)]
+"""A name that becomes a file or folder name (scenario, camera, search space): :mod:`simrig.names`'s rule."""
 
 
 class Strict(BaseModel):

@@ -12,6 +12,8 @@ import tomllib
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from simrig.reading import read_capped
+
 if TYPE_CHECKING:
     from pydantic import BaseModel
 
@@ -35,7 +37,7 @@ def read_toml(path: Path, what: str, error: type[Exception]) -> dict[str, Any]:
     """The table of the TOML file ``path`` (``what`` names it in messages, e.g. ``scenario file``)."""
     where = f"{what} {str(path)!r}"
     try:
-        data = path.read_bytes()
+        data = read_capped(path, what, error)
     except FileNotFoundError:
         raise error(f"{where} does not exist") from None
     except IsADirectoryError:

@@ -10,7 +10,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from .base import FiniteFloat, NonNegativeFloat, PositiveFloat, Strict, set_keys
+from .base import FiniteFloat, NonNegativeFloat, PathName, PositiveFloat, Strict, set_keys
 from .evaluation_schema import EvaluationConfig
 from .perturbation_schema import Perturbation
 from .sensor_schema import RenderConfig, SensorConfig
@@ -77,7 +77,8 @@ class TrafficConfig(Strict):
 class CustomCamera(Strict):
     """One camera of a ``custom`` rig: pose on the ego [m, deg], horizontal field of view [deg], image [px]."""
 
-    name: Annotated[str, Field(min_length=1)]
+    name: PathName
+    """Names the camera's image folder (``images/NAME/``) and its rows; :mod:`simrig.names`'s rule."""
     x_m: FiniteFloat = 0.0
     y_m: FiniteFloat = 0.0
     z_m: FiniteFloat = 1.6
@@ -154,7 +155,8 @@ class Scenario(Strict):
 
         return super().model_validate(with_preset(obj) if isinstance(obj, dict) else obj, *args, **kwargs)
 
-    name: Annotated[str, Field(min_length=1)]
+    name: PathName
+    """Names the default run folder (``runs/NAME-seedN``); :mod:`simrig.names`'s rule."""
     description: str = ""
     frame_rate_hz: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False)] = 10.0
     """[Hz] frames per second of ground truth and sensor output."""

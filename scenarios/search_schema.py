@@ -41,7 +41,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, model_validator
 
-from .base import FiniteFloat, Strict
+from .base import FiniteFloat, PathName, Strict
 
 Number = int | FiniteFloat
 SPACES_DIR = Path(__file__).resolve().parent / "spaces"
@@ -144,7 +144,8 @@ class Dimension(Strict):
 class SearchSpaceConfig(Strict):
     """A validated search space (structure only; see :func:`simrig.search.space.load_space`)."""
 
-    name: Annotated[str, Field(min_length=1)]
+    name: PathName
+    """Names the default search folder (``runs/search/NAME``); :mod:`simrig.names`'s rule."""
     description: str = ""
     base: Annotated[str, Field(min_length=1)]
     frames: Annotated[int, Field(ge=1)] | None = None

@@ -132,8 +132,8 @@ class ScoreConfig(Strict):
 class ClutterConfig(Strict):
     """False positives: a Poisson number per camera and frame, anywhere in the image."""
 
-    rate_per_frame: NonNegativeFloat = 0.2
-    """[-] mean number of false positives per camera and frame."""
+    rate_per_frame: Annotated[float, Field(ge=0, le=50, allow_inf_nan=False)] = 0.2
+    """[-] mean number of false positives per camera and frame (at most 50: every one is a row of every table)."""
     score_range: tuple[Fraction, Fraction] = (0.05, 0.45)
     """[-] their scores are uniform in this range."""
     height_range_px: tuple[PositiveFloat, PositiveFloat] = (20.0, 200.0)
@@ -206,9 +206,9 @@ class GhostConfig(Strict):
     ghost, projected into every camera that sees it; each such camera reports it with ``probability``
     per frame; scores are Beta-distributed with the given mean and concentration."""
 
-    birth_rate_hz: NonNegativeFloat = 0.0
-    """[1/s] ghosts born per second (0: no ghosts)."""
-    mean_life_s: PositiveFloat = 1.0
+    birth_rate_hz: Annotated[float, Field(ge=0, le=100, allow_inf_nan=False)] = 0.0
+    """[1/s] ghosts born per second (0: no ghosts; at most 100)."""
+    mean_life_s: Annotated[float, Field(gt=0, le=3600, allow_inf_nan=False)] = 1.0
     """[s] mean life of a ghost."""
     shadow_fraction: Fraction = 0.5
     """[-] share of ghosts that shadow a real vehicle (the rest are static)."""

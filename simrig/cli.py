@@ -19,6 +19,9 @@ from .errors import SimrigError
 
 MAX_FRAMES = 1_000_000
 """The most frames a scenario may ask for (``scenarios.schema.Scenario.frames``)."""
+EXPLAIN_MAX_SAMPLES = 10_000
+"""The most permutations ``--samples`` / ``--explain-samples`` may ask for (``simrig.explain.api.MAX_SAMPLES``,
+repeated here so that parsing the options imports nothing heavy)."""
 
 
 def _int_at_least(minimum: int, maximum: int = 2**63 - 1):
@@ -299,7 +302,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.explain:
         from .explain import add_to_run_report, explain
 
-        explained = explain(result.dataset.parent, label=result.label, workers=args.workers)
+        explained = explain(result.dataset.parent, label=result.label, workers=args.workers,
+                            trust_file=True)  # the tracker was named on this command line
         print(f"\n{explained.table}\n")
         print(f"wrote     {explained.out} ({explained.coalitions} counterfactual runs, {explained.seconds:.0f} s)")
         print(f"wrote     {add_to_run_report(result.dataset.parent, result.label, explained.document)}")
@@ -328,7 +332,8 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     from .explain import explain
 
     result = explain(args.run_dir, label=args.label, metrics=args.metric, causes=args.causes, samples=args.samples,
-                     engine=args.engine, workers=args.workers, address=args.address, progress=True)
+                     engine=args.engine, workers=args.workers, address=args.address, progress=True,
+                     trust_file=args.trust_file)
     print(result.table)
     plots = f"{len(result.plots)} waterfall plot{'s' if len(result.plots) != 1 else ''}"
     print(f"\nwrote     {result.out}: explain.json, explain.md, verdicts.parquet, {plots} "
@@ -543,7 +548,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--explain", action="store_true",
                        help="then explain every tracker on every base cell (simrig explain; the report's 'What each "
                             "cause costs' section)")
-    bench.add_argument("--explain-samples", type=_int_at_least(2), default=None, metavar="N",
+    bench.add_argument("--explain-samples", type=_int_at_least(2, EXPLAIN_MAX_SAMPLES), default=None, metavar="N",
                        help="permutations --explain samples (default: exact up to 7 cause groups, else 12)")
     bench.add_argument("--explain-seeds", type=_seed_list, default=None, metavar="A,B,...",
                        help="explain only the base cells of these seeds (default: every seed of the suite)")
@@ -605,12 +610,13 @@ def build_parser() -> argparse.ArgumentParser:
                                 "2d:NAME or 3d:NAME picks a dimension)")
     explainer.add_argument("--causes", type=_names, default=None, metavar="A,B,...",
                            help="cause groups to share among (default: every group present in the scenario)")
-    explainer.add_argument("--samples", type=_int_at_least(2), default=None, metavar="N",
+    explainer.add_argument("--samples", type=_int_at_least(2, EXPLAIN_MAX_SAMPLES), default=None, metavar="N",
                            help="sample N permutations (default: exact when there are at most 7 groups, else 12)")
     explainer.add_argument("--engine", choices=("local", "ray"), default="local", help="where the runs go")
     explainer.add_argument("--workers", type=_int_at_least(1), default=None,
                            help="processes (local; 1 runs in this process) or CPUs of a local Ray instance")
     explainer.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
+    _trust_argument(explainer, "the run folder's tracker.json")
     explainer.set_defaults(run=_cmd_explain)
     from .detector.cli import add_detector_command
 

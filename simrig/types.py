@@ -23,6 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .names import path_part
+
 BOX3D_FIELDS: tuple[str, ...] = ("x", "y", "z", "length", "width", "height", "yaw", "vx", "vy")
 """Column order of an ``(N, 9)`` array of 3D boxes: centre [m], size [m], yaw [rad], velocity [m/s]."""
 
@@ -174,6 +176,8 @@ class Rig:
 
     def __post_init__(self) -> None:
         names = [camera.name for camera in self.cameras]
+        for name in names:  # a camera name becomes a folder (images/NAME/) and an export file name
+            path_part(name, f"rig {self.name!r}: camera name")
         if len(set(names)) != len(names):
             raise ValueError(f"rig {self.name!r}: camera names must be unique, got {names}")
 

@@ -21,6 +21,10 @@ BAD = {
     "nan_box": lambda: [_track(box3d=Box3D(float("nan"), 0.0, 0.8, 4.5, 1.9, 1.6, 0.0, 0.0, 0.0))],
     "unknown_camera": lambda: [_track(boxes2d={"NOWHERE": None})],
     "not_tracks": lambda: ["a track"],
+    "score_above_1": lambda: [_track(score=1.5)],
+    "negative_id": lambda: [_track(track_id=-3)],
+    "huge_id": lambda: [_track(track_id=2**64)],
+    "million": lambda: [_track()] * 1_000_000,
 }
 
 
@@ -37,4 +41,19 @@ class Misbehaving:
             return [_track()]
         if self.mode == "raise":
             raise ZeroDivisionError("division by zero in the user's tracker")
+        if self.mode == "exit":
+            raise SystemExit(3)
         return BAD[self.mode]()
+
+
+class FailsWhenBuilt:
+    """A tracker whose constructor raises (a missing model file, say)."""
+
+    def __init__(self):
+        raise FileNotFoundError("weights.pt")
+
+    def reset(self, *, rig, seed=None):
+        pass
+
+    def step(self, frame):
+        return []

@@ -213,11 +213,11 @@ def test_report_shows_the_tables(smoke_local, tmp_path):
 
 
 def test_a_second_bench_in_the_same_folder_stops_at_once(tmp_path):
-    from simrig.benchmark.api import folder_lock
+    from simrig.dataset.outputs import OutputPathError, folder_lock
 
     out = tmp_path / "busy"
     out.mkdir()
-    with folder_lock(out), pytest.raises(BenchError, match="is in use by another simrig bench"):
+    with folder_lock(out, "simrig bench"), pytest.raises(OutputPathError, match="is in use by another simrig bench"):
         run_bench(_tiny(tmp_path / "suite"), out=out, workers=1)
     assert not (out / "fragments").exists()
 

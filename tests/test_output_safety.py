@@ -61,9 +61,13 @@ def test_export_overwrite_pointed_at_a_dataset_or_user_files_deletes_nothing(dat
     # an earlier export is what --overwrite does replace
     out = tmp_path / "export"
     assert main(["export", str(dataset_copy.path), "--format", "kitti", "--out", str(out)]) == 0
-    (out / "stale.txt").write_text("left from before")
+    written = sorted(p.relative_to(out) for p in out.rglob("*") if p.is_file())
+    original = {path: (out / path).read_bytes() for path in written}
+    (out / written[0]).write_text("edited")  # simrig's file: replaced
+    (out / "notes.txt").write_text("mine")  # the user's: kept (only what the marker lists is deleted)
     assert main(["export", str(dataset_copy.path), "--format", "kitti", "--out", str(out), "--overwrite"]) == 0
-    assert (out / "simrig-export.json").is_file() and not (out / "stale.txt").exists()
+    assert {path: (out / path).read_bytes() for path in written} == original
+    assert (out / "notes.txt").read_text() == "mine"
 
 
 def test_generate_overwrite_replaces_only_a_dataset(small_scenario, tmp_path, capsys):

@@ -2,25 +2,22 @@
 
 from __future__ import annotations
 
-import fcntl
 import shlex
-from collections.abc import Iterator
-from contextlib import contextmanager
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 from tqdm import tqdm
 
 from ..dataset.manifest import write_json_atomic
+from ..dataset.outputs import check_output_path, check_own_folder, folder_lock
 from .engine_names import ENGINES
 from .engines import Interrupted, local_engine, machine_workers, ray_engine
-from .evaluate import BenchError
-from .plan import Plan, make_plan
+from .plan import FRAME_SECONDS, Plan, make_plan
 from .results import TABLES, assemble, finished, write_fragment, write_table_atomic
 from .suite import SuiteError, load_suite
 
 BENCH_FILE = "bench.json"
-LOCK_FILE = ".lock"
 
 
 @dataclass(frozen=True)
@@ -63,11 +60,10 @@ def run_bench(
     plan = make_plan(loaded, scenarios)
     out = Path(out) if out is not None else Path("runs") / "bench" / loaded.name
     cache = Path(cache) if cache is not None else out / "datasets"
-    if out.is_dir() and not (out / BENCH_FILE).is_file() and any(p.name != LOCK_FILE for p in out.iterdir()):
-        raise BenchError(f"bench folder {str(out)!r} is not empty and holds no {BENCH_FILE}: simrig writes only into "
-                         "a new or an earlier bench folder; choose another --out")
+    check_output_path(out, what="--out")
+    check_own_folder(out, what="bench folder", marker=BENCH_FILE)
     out.mkdir(parents=True, exist_ok=True)
-    with folder_lock(out):
+    with folder_lock(out, "simrig bench"):
         return _run(plan, suite, out, cache, engine, workers, address, progress)
 
 
@@ -79,6 +75,7 @@ def _run(plan: Plan, suite: str | Path, out: Path, cache: Path, engine: str, wor
     write_json_atomic(out / BENCH_FILE, _description(plan, suite, out, engine, cache, complete=False))
     jobs = plan.jobs(finished(out), cache.absolute())  # a task may run on another node, in another folder
     workers = min(workers or machine_workers(), max(len(jobs), 1))
+    _warn_if_long(jobs, workers, engine)
     results = local_engine(jobs, workers) if engine == "local" else ray_engine(jobs, workers, address)
     bar = tqdm(total=len(plan.cells), initial=len(plan.cells) - len(jobs), unit="cell", disable=not progress,
                desc=f"bench {loaded.name}")
@@ -105,6 +102,17 @@ def _run(plan: Plan, suite: str | Path, out: Path, cache: Path, engine: str, wor
                     len(plan.cells) - len(jobs), len(jobs))
 
 
+def _warn_if_long(jobs: list, workers: int, engine: str) -> None:
+    """Say before it starts when a bench will take more than an hour by a rough estimate
+    (:data:`~simrig.benchmark.plan.FRAME_SECONDS` per frame and worker)."""
+    frames = sum(job.frames for job in jobs)
+    seconds = frames * FRAME_SECONDS / max(workers, 1)
+    if seconds > 3600 and engine == "local":
+        print(f"simrig: {len(jobs):,} cells to run ({frames:,} frames): roughly {seconds / 3600:.1f} h on {workers} "
+              "workers at ~0.05 s per frame and worker; Ctrl-C keeps every finished cell and a rerun resumes",
+              file=sys.stderr)
+
+
 class BenchInterrupted(KeyboardInterrupt):
     """Ctrl-C stopped a bench; :meth:`message` says what was kept and what was lost."""
 
@@ -120,21 +128,6 @@ class BenchInterrupted(KeyboardInterrupt):
             lost = (f"{self.running} running cells were stopped and their work is lost, {self.pending} had not "
                     "started")
         return f"interrupted: {kept}; {lost}; run the same command again to finish"
-
-
-@contextmanager
-def folder_lock(out: Path) -> Iterator[None]:
-    """Hold ``OUT/.lock`` for this process: a second bench in the same folder stops at once, naming it."""
-    handle = (out / LOCK_FILE).open("a+")
-    try:
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            raise BenchError(f"bench folder {str(out)!r} is in use by another simrig bench; wait for it or "
-                             "choose another --out") from None
-        yield
-    finally:
-        handle.close()
 
 
 def _description(plan: Plan, suite: str | Path, out: Path, engine: str, cache: Path, *, complete: bool) -> dict:

@@ -67,8 +67,7 @@ def local_map(function: Callable, items: list, workers: int) -> Iterator[tuple]:
     """``(item, function(item))`` for every item, as they finish, from a pool of ``workers`` spawned
     processes (``function`` must be importable by name). An error cancels what has not started and waits for
     the running items; Ctrl-C stops the running workers at once and raises :class:`Interrupted`."""
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=die_with, initargs=(os.getpid(),))
+    pool = process_pool(workers)
     pending = {}
     try:
         pending = {pool.submit(function, item): item for item in items}
@@ -80,16 +79,23 @@ def local_map(function: Callable, items: list, workers: int) -> Iterator[tuple]:
     except KeyboardInterrupt:
         # a future counts as running once queued to the pool (up to one extra per worker): at most one per worker
         running = min(sum(future.running() for future in pending), workers)
-        _stop_workers(pool)
+        stop_workers(pool)
         raise Interrupted(running, len(pending) - running) from None
     except GeneratorExit:  # the caller stopped early (Ctrl-C while it recorded a cell): do not wait either
-        _stop_workers(pool)
+        stop_workers(pool)
         raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _stop_workers(pool: ProcessPoolExecutor) -> None:
+def process_pool(workers: int) -> ProcessPoolExecutor:
+    """A pool of ``workers`` spawned processes that die with this one (see the module docstring): the one
+    pool every simrig command that fans out locally uses."""
+    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=die_with, initargs=(os.getpid(),))
+
+
+def stop_workers(pool: ProcessPoolExecutor) -> None:
     """Terminate every worker of ``pool`` now (their cells are abandoned; a partial dataset folder they were
     writing is hidden and removed by the next run)."""
     processes = list((getattr(pool, "_processes", None) or {}).values())

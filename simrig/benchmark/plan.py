@@ -17,9 +17,14 @@ from simrig.pipeline.cache import dataset_key, world_key
 from simrig.scenarios import Scenario
 
 from .parameters import apply_parameter, parameter_value
-from .suite import Suite, TrackerEntry, tracker_runs_on
+from .suite import Suite, SuiteError, TrackerEntry, tracker_runs_on
 
 BASE = ""
+MAX_CELLS = 100_000
+"""The most datasets (cells) one bench may plan: more is refused before anything runs."""
+FRAME_SECONDS = 0.05
+"""[s] rough cost of one frame of one cell on one worker, generation and every tracker of a 12-tracker suite
+included (the standard suite on a 2-core machine); only for the warning a long plan gets before it starts."""
 """The ``sweep`` of a point that runs a scenario with its own settings."""
 
 
@@ -109,6 +114,9 @@ def make_plan(suite: Suite, scenarios: dict[str, Scenario]) -> Plan:
                 frames = suite.frames or variant.frames
                 key = dataset_key(variant, seed, frames)
                 cells.setdefault(key, (variant, seed, frames))
+                if len(cells) > MAX_CELLS:
+                    raise SuiteError(f"suite {suite.name!r}: more than {MAX_CELLS:,} cells (scenarios × sweep values × "
+                                     "seeds); split it into several suites")
                 settings = tuple((sweep.parameter, parameter_value(variant, sweep.parameter)
                                   if reference in suite.sweep_scenarios(sweep) else None) for sweep in suite.sweeps)
                 points.append(Point(scenario.name, scenario.rig.preset, sweep_name, value, seed, frames, key,

@@ -19,13 +19,13 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from pathlib import Path
 
 import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ..dataset.manifest import write_json_atomic
+from ..dataset.outputs import atomic_file
 from .evaluate import CAMERA_METRICS, METRIC_COLUMNS, Outcome
 from .plan import Plan, tracker_key
 
@@ -127,9 +127,6 @@ def causes_schema() -> pa.Schema:
 
 
 def write_table_atomic(table: pa.Table, path: Path) -> None:
-    """Parquet through a temporary sibling, flushed, then renamed."""
-    temporary = path.with_name(path.name + ".tmp")
-    pq.write_table(table, temporary)
-    with temporary.open("rb") as handle:
-        os.fsync(handle.fileno())
-    os.replace(temporary, path)
+    """Parquet through a temporary sibling, flushed, then renamed (:func:`~simrig.dataset.outputs.atomic_file`)."""
+    with atomic_file(path) as temporary:
+        pq.write_table(table, temporary)

@@ -89,11 +89,15 @@ class TrackerEntry(Strict):
         return self
 
 
+MAX_SEEDS = 10_000
+"""The most seeds a suite may list."""
+
+
 class Sweep(Strict):
     """One parameter varied over ``values``, from each scenario's own settings."""
 
     parameter: Annotated[str, Field(min_length=1)]
-    values: Annotated[tuple[float, ...], Field(min_length=1)]
+    values: Annotated[tuple[Annotated[float, Field(allow_inf_nan=False)], ...], Field(min_length=1, max_length=1000)]
     scenarios: tuple[str, ...] = ()
     """The suite's scenarios it applies to; all when empty."""
 
@@ -111,7 +115,8 @@ class Suite(Strict):
     """Names the default bench folder ``runs/bench/NAME``: letters, digits, ``_.-``, no folder part."""
     description: str = ""
     scenarios: Annotated[tuple[str, ...], Field(min_length=1)]
-    seeds: Annotated[tuple[Annotated[int, Field(ge=0)], ...], Field(min_length=1)]
+    seeds: Annotated[tuple[Annotated[int, Field(ge=0, lt=2**63)], ...], Field(min_length=1, max_length=MAX_SEEDS)]
+    """At most :data:`MAX_SEEDS`; the plan's cells are bounded too (:data:`simrig.benchmark.plan.MAX_CELLS`)."""
     frames: Annotated[int, Field(ge=1, le=1_000_000)] | None = None
     """[-] frames of every cell; each scenario's own when omitted."""
     frame_time_limit_s: Annotated[float, Field(ge=0, le=86_400, allow_inf_nan=False)] = 60.0

@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import platform
 import re
 from importlib import metadata
 from pathlib import Path
 
 from ..errors import DatasetError
+from ..reading import open_regular, read_capped
+from .outputs import write_text_atomic
 
 MANIFEST_NAME = "manifest.json"
 FORMAT_NAME = "simrig-dataset"
@@ -34,7 +35,7 @@ _VERSIONED_PACKAGES = (
 def file_sha256(path: Path) -> str:
     """Hex SHA-256 of a file's bytes."""
     digest = hashlib.sha256()
-    with path.open("rb") as handle:
+    with open_regular(path, "dataset file", DatasetError) as handle:
         for block in iter(lambda: handle.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
@@ -107,24 +108,15 @@ def check_manifest(path: Path, manifest: dict) -> None:
 def write_json_atomic(path: Path, data: dict) -> None:
     """Write ``data`` as JSON to ``path`` through a temporary file, flushed to disk, then renamed. ``data`` is
     serialised first, so data that is not JSON (NaN, infinity) raises before any file is touched."""
-    text = json.dumps(data, indent=2, sort_keys=False, allow_nan=False) + "\n"
-    temporary = path.with_name(path.name + ".tmp")
-    try:
-        with temporary.open("w", encoding="utf-8") as handle:
-            handle.write(text)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(temporary, path)
-    finally:
-        temporary.unlink(missing_ok=True)
+    write_text_atomic(path, json.dumps(data, indent=2, sort_keys=False, allow_nan=False) + "\n")
 
 
 def written_by_simrig(folder: Path) -> bool:
     """Whether ``folder`` holds a ``manifest.json`` that simrig wrote (a JSON object of our format), whatever its
     state: complete or not, damaged or from an older simrig. Such a folder is one ``--overwrite`` may replace."""
     try:
-        manifest = json.loads((folder / MANIFEST_NAME).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        manifest = json.loads(read_capped(folder / MANIFEST_NAME, "manifest", DatasetError))
+    except (OSError, ValueError, DatasetError):
         return False
     return isinstance(manifest, dict) and manifest.get("format") == FORMAT_NAME
 
@@ -133,8 +125,7 @@ def read_manifest(folder: Path) -> dict | None:
     """The manifest of ``folder`` if it exists and says ``complete: true``; ``None`` otherwise."""
     path = folder / MANIFEST_NAME
     try:
-        with path.open(encoding="utf-8") as handle:
-            manifest = json.load(handle)
+        manifest = json.loads(read_capped(path, "manifest", DatasetError).decode("utf-8"))
     except FileNotFoundError:
         return None
     except (json.JSONDecodeError, UnicodeDecodeError) as error:

@@ -15,6 +15,7 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from ..errors import DatasetError
+from ..reading import read_capped
 from ..rig import rig_from_dict
 from ..road import RoadMarkings
 from ..types import (
@@ -164,7 +165,7 @@ class Dataset:
         :class:`DatasetError` naming the dataset and the table when it is missing or changed."""
         file = self._entry_file(name)
         try:
-            data = file.read_bytes()
+            data = read_capped(file, f"{self.path}: {name}", DatasetError)
         except OSError as error:
             raise self._unreadable(name, error) from None
         self._check_sha256(name, hashlib.sha256(data).hexdigest())

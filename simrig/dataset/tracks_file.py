@@ -18,7 +18,6 @@ outside the dataset, an empty box, and a track id used twice in one frame (per c
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,9 +28,11 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from simrig.errors import TracksError
+from simrig.reading import check_regular
 from simrig.types import BOX2D_FIELDS, BOX3D_FIELDS, ActorClass, Track
 
 from .arrow_columns import shared_strings
+from .outputs import atomic_file
 
 TRACKS3D_FILE = "tracks3d.parquet"
 TRACKS2D_FILE = "tracks2d.parquet"
@@ -144,9 +145,8 @@ def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]] 
         if name not in tables and (out / name).exists():
             (out / name).unlink()  # a stale table from an earlier run must not be scored with this one
     for name, table in tables.items():
-        partial = out / f".{name}.partial"
-        pq.write_table(table, partial)
-        os.replace(partial, out / name)
+        with atomic_file(out / name) as partial:
+            pq.write_table(table, partial)
     return out
 
 
@@ -199,6 +199,7 @@ def read_tracks(path: Path | str, *, frame_count: int, cameras: tuple[str, ...])
 def _layout_of(file: Path) -> str:
     """Which layout a single Parquet file has: 2D if it has a ``camera`` column."""
     try:
+        check_regular(file, "tracks file", TracksError)
         names = pq.read_schema(file).names
     except (pa.ArrowInvalid, OSError) as error:
         raise TracksError(f"{file}: not a readable Parquet file ({error})") from None
@@ -213,6 +214,7 @@ def _read(file: Path, layout: str, frame_count: int, cameras: tuple[str, ...]) -
         return TracksError(f"{file}: not a readable Parquet file ({error})")
 
     try:
+        check_regular(file, "tracks file", TracksError)
         parquet = pq.ParquetFile(file)
     except (pa.ArrowInvalid, OSError) as error:
         raise unreadable(error) from None
@@ -254,6 +256,12 @@ def _rows(file: Path | str, names: list[str], column: Callable[[str], pa.Chunked
     if first_bad:  # the first in row order, then column order
         row, col = min(first_bad)
         fail(row, f"column {numeric[col]!r} is {columns[numeric[col]][row]} (must be a finite number)")
+    negative = np.nonzero(track_id < 0)[0]
+    if len(negative):
+        fail(int(negative[0]), f"track id {track_id[negative[0]]} is negative (ids are 0 … 2⁶³ − 1)")
+    unscored = np.nonzero((columns["score"] < 0.0) | (columns["score"] > 1.0))[0]
+    if len(unscored):
+        fail(int(unscored[0]), f"score {columns['score'][unscored[0]]} is outside 0 … 1 (a confidence)")
     outside = np.nonzero((frame < 0) | (frame >= frame_count))[0]
     if len(outside):
         fail(int(outside[0]), f"frame {frame[outside[0]]} is not in the dataset (frames 0…{frame_count - 1})")
@@ -310,6 +318,10 @@ def _column(file: Path | str, column: pa.ChunkedArray, field: pa.Field) -> np.nd
     if pa.types.is_integer(field.type):
         if not pa.types.is_integer(kind):
             raise TracksError(f"{file}: column {field.name!r} must hold integers, found {kind}")
+        largest = np.iinfo(np.int64).max
+        if pa.types.is_uint64(kind) and len(column) and pc.max(column).as_py() > largest:
+            row = int(pc.index(pc.greater(column, pa.scalar(largest, pa.uint64())), True).as_py())
+            raise TracksError(f"{file}: row {row}: column {field.name!r} is {column[row].as_py()}, beyond 2⁶³ − 1")
         return column.to_numpy().astype(np.int64)
     if not (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
         raise TracksError(f"{file}: column {field.name!r} must hold numbers, found {kind}")

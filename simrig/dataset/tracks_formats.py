@@ -16,6 +16,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from simrig.errors import TracksError
+from simrig.reading import open_regular
 
 from .ground_truth import project_tracks
 from .tracks_file import TRACKS2D_FILE, TRACKS3D_FILE, TrackRows, TrackSet, read_tracks, tracks_in_memory
@@ -51,8 +52,8 @@ def detect_format(path: Path, cameras: tuple[str, ...]) -> str:
 
 def _sniff(file: Path) -> str:
     try:
-        with file.open() as stream:
-            first = next((line for line in stream if line.strip()), "")
+        with open_regular(file, "tracks file", TracksError) as stream:
+            first = next((line.decode("utf-8") for line in stream if line.strip()), "")
     except (OSError, UnicodeDecodeError) as error:
         raise TracksError(f"{file}: cannot be read as text ({error})") from None
     return "motchallenge" if "," in first else "kitti"

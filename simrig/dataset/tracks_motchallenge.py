@@ -24,6 +24,7 @@ import numpy as np
 import pyarrow as pa
 
 from simrig.errors import TracksError
+from simrig.reading import open_regular
 
 from .tracks_file import CLASSES, TRACKS2D_FILE, TRACKS2D_SCHEMA, _table
 
@@ -66,7 +67,8 @@ def camera_and_class(file: Path, cameras: tuple[str, ...]) -> tuple[str, str]:
 def parse_lines(file: Path, separator: str | None, minimum: int, names: tuple[str, ...]) -> list[tuple[int, list[str]]]:
     """The non-empty lines of ``file`` as (line number, fields), each with the first line's field count."""
     try:
-        text = file.read_text()
+        with open_regular(file, "tracks file", TracksError) as handle:
+            text = handle.read().decode("utf-8")
     except (OSError, UnicodeDecodeError) as error:
         raise TracksError(f"{file}: cannot be read as text ({error})") from None
     lines, expected = [], None

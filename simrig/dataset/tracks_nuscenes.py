@@ -15,15 +15,19 @@ the sample token in it.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
 
 from simrig.errors import SimrigError, TracksError
+from simrig.reading import read_capped
 
 from .tracks_file import CLASSES, TRACKS3D_FILE, TRACKS3D_SCHEMA, _table
 
+MAX_RESULTS_BYTES = 2 * 2**30
+"""[bytes] the largest results JSON read (nuScenes' full validation results are about 1 GB)."""
 BOX_KEYS = ("translation", "size", "rotation", "velocity", "tracking_id", "tracking_name", "tracking_score")
 
 
@@ -57,7 +61,7 @@ def read_results(path: Path, *, tokens: dict[str, int], kind: str = "tracking",
     for (empty lists count). ``tokens``: the dataset's sample token → frame. Errors (``error``) name the file
     and the line of the sample token."""
     try:
-        text = path.read_text()
+        text = read_capped(path, f"nuScenes {kind} results", error, max_bytes=MAX_RESULTS_BYTES).decode("utf-8")
         document = json.loads(text)
     except (OSError, UnicodeDecodeError) as problem:
         raise error(f"{path}: cannot be read as text ({problem})") from None
@@ -92,6 +96,12 @@ def read_results(path: Path, *, tokens: dict[str, int], kind: str = "tracking",
             except (TypeError, ValueError) as problem:
                 raise error(f"{where}: sample {token!r}, box {k}: {problem} (translation 3, size 3, "
                             f"rotation 4, velocity 2 numbers, {kind}_score a number)") from None
+            norm = math.sqrt(w * w + qx * qx + qy * qy + qz * qz)
+            if not 0.5 < norm < 1.5:  # a unit quaternion, give or take the digits a file was printed with
+                raise error(f"{where}: sample {token!r}, box {k}: rotation {box['rotation']} is not a unit "
+                            f"quaternion (norm {norm:g})")
+            if not 0.0 <= score <= 1.0:
+                raise error(f"{where}: sample {token!r}, box {k}: {kind}_score {score} is outside 0 … 1")
             yaw = float(np.arctan2(2.0 * (w * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz)))
             boxes.append((tokens[token], str(box.get("tracking_id", "")), box[f"{kind}_name"], score,
                           x, y, z, length, width, height, yaw, vx, vy))

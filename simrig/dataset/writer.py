@@ -8,7 +8,7 @@ name, where no reader looks, and the next run into the same place removes it.
 
 from __future__ import annotations
 
-import os
+import json
 import shutil
 from pathlib import Path
 
@@ -16,7 +16,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from ..errors import DatasetError, DatasetExistsError
+from ..errors import DatasetError, DatasetExistsError, SimrigError
+from ..reading import read_capped
 from .manifest import (
     FORMAT_NAME,
     FORMAT_VERSION,
@@ -29,7 +30,7 @@ from .manifest import (
     write_json_atomic,
     written_by_simrig,
 )
-from .outputs import check_output_path, partial_sibling, remove_stale_partials
+from .outputs import PARTIAL_MARKER, check_output_path, make_partial, partial_sibling, publish, remove_stale_partials
 from .tables import SCHEMAS
 
 FRAMES_PER_ROW_GROUP = 100
@@ -63,6 +64,23 @@ def check_output_folder(out: Path, *, overwrite: bool) -> None:
         )
 
 
+def _dataset_file_names(folder: Path):
+    """Whether a relative path in the dataset ``folder`` is one simrig writes: a table, ``rig.json``, the
+    manifest, an image, or a file the folder's manifest lists (read even when the manifest is damaged)."""
+    names = {f"{name}.parquet" for name in SCHEMAS} | {"rig.json", MANIFEST_NAME}
+    try:
+        listed = json.loads(read_capped(folder / MANIFEST_NAME, "manifest")).get("files", {})
+        names |= {entry["file"] for entry in listed.values() if isinstance(entry, dict)
+                  and isinstance(entry.get("file"), str)}
+    except (OSError, ValueError, AttributeError, SimrigError):
+        pass
+
+    def ours(relative: Path) -> bool:
+        return relative.parts[0] == IMAGES_FOLDER or (len(relative.parts) == 1 and relative.name in names)
+
+    return ours
+
+
 def _concatenate(chunks: list, arrow_type: pa.DataType) -> pa.Array:
     """One Arrow column from per-frame chunks (numpy arrays, or Arrow arrays for list columns)."""
     if isinstance(chunks[0], pa.Array):
@@ -86,12 +104,14 @@ class DatasetWriter:
         self._rows: dict[str, int] = dict.fromkeys(SCHEMAS, 0)
         self._buffered_frames = 0
         self._committed = False
+        self.kept: list[Path] = []
+        """Files a user had added to the dataset this one replaced, moved into it (relative paths)."""
 
     def __enter__(self) -> DatasetWriter:
         check_output_folder(self.out, overwrite=self.overwrite)
         self.out.parent.mkdir(parents=True, exist_ok=True)
         remove_stale_partials(self.out)
-        self.partial.mkdir()
+        make_partial(self.partial)
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
@@ -153,7 +173,7 @@ class DatasetWriter:
         self._writers.clear()
         files = {}
         for path in sorted(self.partial.iterdir()):
-            if path.is_dir():
+            if path.is_dir() or path.name == PARTIAL_MARKER:
                 continue
             entry = {"file": path.name, "sha256": file_sha256(path)}
             if path.stem in self._rows:
@@ -173,11 +193,6 @@ class DatasetWriter:
         return full
 
     def _publish(self) -> None:
-        old = None
         if self.out.exists():
             check_output_folder(self.out, overwrite=self.overwrite)  # it may have changed since we started
-            old = self.out.parent / f".{self.out.name}.old-{os.getpid()}"
-            os.replace(self.out, old)
-        os.replace(self.partial, self.out)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+        self.kept = publish(self.partial, self.out, _dataset_file_names(self.out))

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..dataset.outputs import write_text_atomic
+
 
 def _file_output(path: Path, what: str, inputs) -> None:
     """``path`` checked as a file output before any work; a symbolic link is refused (no write follows one)."""
@@ -36,7 +38,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         text = results[0].to_json() if pooled is None else json.dumps(
             {"datasets": [asdict(result) for result in results], "reid_pooled": [asdict(row) for row in pooled]},
             indent=2)
-        args.json.write_text(text + "\n", encoding="utf-8")
+        write_text_atomic(args.json, text + "\n")
         print(f"written to {args.json}")
     return 0
 

@@ -36,6 +36,7 @@ import numpy as np
 
 from ..causes import Cause, cause_masks
 from ..dataset import Dataset
+from ..dataset.outputs import write_text_atomic
 from ..errors import SimrigError
 from .estimators import Fit, box_errors, fit_box3d, fit_scores, gilbert_elliott, sigma_vs_range
 from .measure import _STRUCTURAL, consecutive_pairs, lag1, linked_errors
@@ -148,7 +149,7 @@ def fit_to_toml(detections: Path, truth: Path | None, out: Path, cameras: int | 
     header = "".join(f"# {note}\n" for note in [f"fitted by simrig detector fit from {source}", *fit.notes])
     text = header + tomli_w.dumps({"sensor": fit.sensor})
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text, encoding="utf-8")
+    write_text_atomic(out, text)
     return text + f"\nwritten to {out}"
 
 

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..dataset.outputs import write_text_atomic
 from ..errors import SimrigError
 from ..sensor.processes import ar1_coefficient
 from .reid import (
@@ -353,7 +354,7 @@ def fit_embeddings_to_toml(path: Path, out: Path, frame_rate_hz: float = 10.0, *
         lines.append(f"same identity, two cameras, one frame: mean cos {m.cross_mean:.3f} "
                      f"(model {fit.fitted_cross:.3f})")
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text, encoding="utf-8")
+    write_text_atomic(out, text)
     return "\n".join(["the log's re-ID table (left) beside the source's (right):", format_table(reid_table(log)), "",
                       *lines, "", text, f"written to {out}"])
 

@@ -28,10 +28,13 @@ import pyarrow.parquet as pq
 
 from simrig.dataset import Dataset
 from simrig.dataset.manifest import write_json_atomic
+from simrig.dataset.outputs import atomic_file, write_text_atomic
 from simrig.errors import SimrigError
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
-from simrig.pipeline.run import DATASET_DIR, REPORT, SCORES_DIR, TRACKER_RECORD, TRACKS_DIR, write_text_atomic
+from simrig.pipeline.run import DATASET_DIR, REPORT, SCORES_DIR, TRACKER_RECORD, TRACKS_DIR
 from simrig.pipeline.track import TrackingError, build_tracker
+from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
+from simrig.reading import read_capped
 from simrig.scenarios.schema import scenario_from_record
 from simrig.scoring.attribution import KINDS
 from simrig.scoring.results import METRICS_2D, METRICS_3D
@@ -47,6 +50,9 @@ EXACT_LIMIT = 7
 """Up to this many groups the Shapley values are exact (2^7 = 128 coalitions); above, sampled."""
 DEFAULT_SAMPLES = 12
 """Permutations sampled when the groups are too many for the exact values and ``samples`` is not given."""
+MAX_SAMPLES = 10_000
+"""Most permutations one game may sample: the orders are held in memory, and far fewer already give a
+half-width below the run-to-run noise."""
 DEFAULT_METRICS_3D = ("AMOTA", "HOTA", "IDS", "FN", "FRAG")
 DEFAULT_METRICS_2D = ("HOTA", "IDSW", "CLR_FN", "Frag")
 
@@ -70,19 +76,22 @@ class ExplainResult:
 
 def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str] | None = None,
             causes: list[str] | None = None, samples: int | None = None, engine: str = "local",
-            workers: int | None = None, address: str | None = None, progress: bool = False) -> ExplainResult:
+            workers: int | None = None, address: str | None = None, progress: bool = False,
+            trust_file: bool = False) -> ExplainResult:
     """Explain the tracker run ``label`` of the ``simrig run`` folder ``run_dir`` (see the module docstring).
 
     ``metrics``: overall metric names (3D first when the tracker has 3D tracks; ``2d:NAME``/``3d:NAME`` to
     choose); ``causes``: the groups to share among (default: every group present in the scenario — an absent
     one is a null cause, share exactly 0); ``samples``: permutations to sample (default: exact when there are
     at most :data:`EXACT_LIMIT` groups, else :data:`DEFAULT_SAMPLES`); ``engine`` ``local`` (a process pool of
-    ``workers``; 1 runs in this process) or ``ray``."""
+    ``workers``; 1 runs in this process) or ``ray``. A run folder is data: its ``tracker.json`` may name a
+    registered tracker; a ``module:attribute`` there is imported only with ``trust_file`` (``--trust-file``,
+    :mod:`simrig.pipeline.trust`)."""
     started = time.perf_counter()
     run_dir = Path(run_dir)
     dataset = _dataset(run_dir)
     label = _label(run_dir, label)
-    record = _tracker_record(run_dir, label)
+    record = _tracker_record(run_dir, label, trust_file)
     if not (run_dir / SCORES_DIR / label / "errors.parquet").is_file():
         raise ExplainError(f"{run_dir / SCORES_DIR / label}: no errors.parquet (the run was not scored; run "
                            "'simrig run' again into this folder)")
@@ -101,9 +110,8 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     write_json_atomic(out / "explain.json", document)
     table = explain_table(document)
     write_text_atomic(out / "explain.md", explain_markdown(document, table))
-    partial = out / ".verdicts.parquet.partial"
-    pq.write_table(verdicts["table"], partial)
-    partial.replace(out / "verdicts.parquet")
+    with atomic_file(out / "verdicts.parquet") as partial:
+        pq.write_table(verdicts["table"], partial)
     plots = tuple(waterfall(document, name, out / f"waterfall-{_file_name(name)}.png") for name in chosen)
     for stale in set(out.glob("waterfall-*.png")) - set(plots):  # an earlier explain's other metrics
         stale.unlink()
@@ -164,6 +172,8 @@ def plan_game(dataset: Dataset, players: tuple[str, ...], samples: int | None, v
     each single removal, and the error keys of those and of the actual run."""
     if samples is not None and samples < 2:
         raise ExplainError(f"--samples: at least 2 permutations (an order and its reverse) are needed, got {samples}")
+    if samples is not None and samples > MAX_SAMPLES:
+        raise ExplainError(f"--samples: at most {MAX_SAMPLES:,} permutations, got {samples:,}")
     exact = samples is None and len(players) <= EXACT_LIMIT
     orders = None if exact else sample_orders(players, samples or DEFAULT_SAMPLES, dataset.seed)
     singles = {frozenset({p}) for p in players} if verdicts else set()
@@ -254,11 +264,12 @@ def _label(run_dir: Path, label: str | None) -> str:
     return label
 
 
-def _tracker_record(run_dir: Path, label: str) -> dict:
-    """The tracker's record, checked by building the tracker once; a one-line error when it cannot be."""
+def _tracker_record(run_dir: Path, label: str, trust_file: bool = False) -> dict:
+    """The tracker's record, checked by building the tracker once; a one-line error when it cannot be, or when
+    it names a ``module:attribute`` and the folder is not trusted (nothing is imported then)."""
     path = run_dir / TRACKS_DIR / label / TRACKER_RECORD
     try:
-        record = json.loads(path.read_text(encoding="utf-8"))
+        record = json.loads(read_capped(path, TRACKER_RECORD, ExplainError))
         tracker, params, camera = record["tracker"], record["params"], record["camera"]
         if not isinstance(tracker, str) or not isinstance(params, dict):
             raise TypeError("tracker must be a name, params a table")
@@ -270,7 +281,10 @@ def _tracker_record(run_dir: Path, label: str) -> dict:
     except (OSError, ValueError, KeyError, TypeError) as error:
         raise ExplainError(f"{path}: not a tracker record ({error})") from None
     try:
+        check_file_reference(tracker, trusted=trust_file, where=str(path), override=None)
         build_tracker(tracker, params)
+    except TrackerReferenceError as error:
+        raise ExplainError(str(error)) from None
     except TrackingError as error:
         raise ExplainError(f"{path}: the tracker cannot be recreated: {error}") from None
     return {"tracker": tracker, "params": params, "camera": camera}

@@ -5,7 +5,6 @@ cause) in ``OUT/explain.parquet`` — what ``simrig report`` turns into its "Wha
 from __future__ import annotations
 
 import json
-import os
 import shlex
 from itertools import groupby
 from pathlib import Path
@@ -14,6 +13,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from simrig.dataset import Dataset
+from simrig.dataset.outputs import atomic_file
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
 from simrig.scenarios.schema import scenario_from_record
 from simrig.sensor.groups import present_groups
@@ -130,7 +130,6 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
     table = pa.Table.from_pylist(rows, schema=SCHEMA.with_metadata({"command": shlex.join(command),
                                                                     NOT_EXPLAINED: json.dumps(not_explained)}))
     path = out / EXPLAIN_TABLE
-    partial = out / f".{EXPLAIN_TABLE}.partial-{os.getpid()}"
-    pq.write_table(table, partial)
-    os.replace(partial, path)
+    with atomic_file(path) as partial:
+        pq.write_table(table, partial)
     return path

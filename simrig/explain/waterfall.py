@@ -5,6 +5,8 @@ from __future__ import annotations
 import textwrap
 from pathlib import Path
 
+from simrig.dataset.outputs import save_figure
+
 
 def waterfall(document: dict, metric: str, path: Path) -> Path:
     """Draw ``metric`` of an ``explain.json`` document to ``path`` (PNG): a bar per cause group from the running
@@ -42,8 +44,8 @@ def waterfall(document: dict, metric: str, path: Path) -> Path:
     figure.supxlabel(textwrap.fill(document["command"], width, break_on_hyphens=False), fontsize=6, color="0.4",
                      x=0.01, ha="left")
     path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.name}.partial.png")
-    figure.savefig(partial, dpi=110)
-    plt.close(figure)
-    partial.replace(path)
+    try:
+        save_figure(figure, path, dpi=110)
+    finally:
+        plt.close(figure)
     return path

@@ -1,14 +1,15 @@
 """The export entry point: load what the scorer loads once, hand it to a format, publish atomically.
 
-Every export folder holds ``simrig-export.json`` (the format and the dataset's scenario and seed); ``--overwrite``
-replaces only a folder that holds it, so it can never delete a dataset or a folder of the user's files. The
+Every export folder holds ``simrig-export.json`` (the format, the dataset's scenario and seed, and every file the
+export wrote); ``--overwrite`` replaces only a folder whose marker is a complete, valid one, and deletes only the
+files it lists: a file a user added to the export is moved into the new one. The
 output is checked before any work (:func:`simrig.dataset.outputs.check_output_path`): not inside or around the
 dataset or the tracks, not in a system folder, not under a file. The partial folder is named per process.
 """
 
 from __future__ import annotations
 
-import os
+import json
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,8 +23,16 @@ from ..dataset import Dataset
 from ..dataset.evaluation import evaluation_of, ignore_rules
 from ..dataset.ground_truth import GroundTruth, project_tracks
 from ..dataset.manifest import write_json_atomic
-from ..dataset.outputs import check_output_path, partial_sibling, remove_stale_partials
+from ..dataset.outputs import (
+    PARTIAL_MARKER,
+    check_output_path,
+    make_partial,
+    partial_sibling,
+    publish,
+    remove_stale_partials,
+)
 from ..errors import SimrigError
+from ..reading import read_capped
 
 
 class ExportError(SimrigError):
@@ -53,6 +62,7 @@ def _formats():
 
 
 FORMATS = ("motchallenge", "kitti", "nuscenes")
+WRITTEN_BY = "simrig export"
 MARKER = "simrig-export.json"
 """The file that marks a folder as written by ``simrig export`` (the only kind ``--overwrite`` replaces)."""
 
@@ -76,9 +86,7 @@ def export(dataset: Dataset | Path | str, fmt: str, out: Path | str, *, tracks: 
     if out.exists():
         if not overwrite:
             raise ExportError(f"--out {str(out)!r} already exists; pass --overwrite to replace it")
-        if not (out / MARKER).is_file():
-            raise ExportError(f"--out {str(out)!r} was not written by simrig export (it has no {MARKER}); "
-                              "--overwrite replaces only an earlier export: choose another folder")
+        written = _written_files(out)
     truth = dataset.ground_truth
     config = evaluation_of(dataset.scenario, evaluation)
     ignored = ignore_rules(truth, config)
@@ -96,21 +104,36 @@ def export(dataset: Dataset | Path | str, fmt: str, out: Path | str, *, tracks: 
     out.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_partials(out)
     partial = partial_sibling(out)
-    partial.mkdir()
+    make_partial(partial)
     try:
         _formats()[fmt](data, partial)
+        files = sorted(path.relative_to(partial).as_posix() for path in partial.rglob("*")
+                       if path.is_file() and path.name != PARTIAL_MARKER)
         scenario = dataset.scenario
-        write_json_atomic(partial / MARKER, {"written_by": "simrig export", "format": fmt,
+        write_json_atomic(partial / MARKER, {"written_by": WRITTEN_BY, "format": fmt,
                                              "scenario": scenario["name"], "seed": dataset.seed,
-                                             "tracker": name if tracks is not None else None})
+                                             "tracker": name if tracks is not None else None, "files": files})
     except BaseException:
         shutil.rmtree(partial, ignore_errors=True)
         raise
-    old = None
     if out.exists():
-        old = out.parent / f".{out.name}.old-{os.getpid()}"
-        os.replace(out, old)
-    os.replace(partial, out)
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
+        written = _written_files(out)  # it may have changed since we started
+    publish(partial, out, lambda relative: relative.as_posix() in written)
     return out
+
+
+def _written_files(out: Path) -> set[str]:
+    """The files an earlier export in ``out`` wrote (its marker among them), from its marker; an
+    :class:`ExportError` when ``out`` holds no complete, valid marker (then it is not ours to replace)."""
+    refuse = (f"--out {str(out)!r} was not written by simrig export (it has no complete {MARKER}); --overwrite "
+              "replaces only an earlier export: choose another folder")
+    try:
+        marker = json.loads(read_capped(out / MARKER, MARKER, ExportError))
+    except (OSError, ValueError):
+        raise ExportError(refuse) from None
+    files = marker.get("files") if isinstance(marker, dict) else None
+    if (not isinstance(marker, dict) or marker.get("written_by") != WRITTEN_BY or marker.get("format") not in FORMATS
+            or not isinstance(files, list) or not all(isinstance(f, str) and f and ".." not in f.split("/")
+                                                      for f in files)):
+        raise ExportError(refuse)
+    return {*files, MARKER}

@@ -14,6 +14,7 @@ import pyarrow as pa  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
 from simrig.dataset import Dataset  # noqa: E402
+from simrig.dataset.outputs import save_figure  # noqa: E402
 from simrig.figures.mosaic import identity_colour  # noqa: E402
 from simrig.road import dash_segments  # noqa: E402
 
@@ -76,6 +77,6 @@ def plot_bev(dataset: Dataset, tracks3d: pa.Table | None, switches: list[tuple[i
               label="tracks (a colour per id)" if tracks3d is not None else "no 3D tracks (a 2D tracker)")
     axis.legend(fontsize=8, loc="upper left")
     figure.tight_layout()
-    figure.savefig(out)
+    save_figure(figure, out)
     plt.close(figure)
     return out

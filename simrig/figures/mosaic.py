@@ -23,6 +23,7 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.patches import Polygon, Rectangle  # noqa: E402
 
 from simrig.dataset import Dataset  # noqa: E402
+from simrig.dataset.outputs import save_figure  # noqa: E402
 from simrig.errors import DatasetError  # noqa: E402
 from simrig.geometry import box_corners  # noqa: E402
 from simrig.road import dash_segments  # noqa: E402
@@ -195,6 +196,6 @@ def render_mosaic(dataset_path: Path | str, frame: int, out: Path | str, tracks:
                     + (", dotted: tracks (T<id>)" if tracks is not None else ""), fontsize=10)
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(out, bbox_inches="tight")
+    save_figure(figure, out, bbox_inches="tight")
     plt.close(figure)
     return out

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from pathlib import Path
 
+from simrig.dataset.outputs import write_text_atomic
 from simrig.dataset.reader import Dataset
 from simrig.errors import DatasetError, DatasetExistsError
 from simrig.scenarios import Scenario
@@ -110,6 +110,4 @@ def _remember_world(root: Path, world: str, dataset_name: str) -> None:
     """Record (atomically) that ``root/dataset_name`` is a complete dataset of ``world``."""
     folder = root / WORLDS_FOLDER
     folder.mkdir(parents=True, exist_ok=True)
-    partial = folder / f".{world}.{os.getpid()}.partial"
-    partial.write_text(dataset_name, encoding="utf-8")
-    os.replace(partial, folder / world)
+    write_text_atomic(folder / world, dataset_name)

@@ -25,6 +25,10 @@ import numpy as np
 from simrig.errors import SimrigError
 from simrig.types import ActorClass, Box2D, Box3D, Track
 
+MAX_TRACKS_PER_FRAME = 10_000
+"""The most tracks one frame's answer may hold (a real scene holds a few hundred objects at most)."""
+MAX_TRACK_ID = 2**63 - 1
+"""Track ids are stored as int64: 0 … this."""
 FRAME_TIME_LIMIT_S = 60.0
 """[s] default limit on one ``step()`` call (``reset`` gets the same; ``finish`` this per frame stepped)."""
 CLASS_NAMES = tuple(member.value for member in ActorClass)
@@ -81,6 +85,9 @@ def checked_tracks(returned: object, *, tracker: str, frame: int, cameras: tuple
     where = f"tracker {tracker!r}: frame {frame}"
     if not isinstance(returned, (list, tuple)):
         raise TrackerFault(f"{where}: {call} returned a {type(returned).__name__}, not a list of Track")
+    if len(returned) > MAX_TRACKS_PER_FRAME:
+        raise TrackerFault(f"{where}: {call} returned {len(returned):,} tracks, more than the {MAX_TRACKS_PER_FRAME:,} "
+                           "a frame may hold")
     seen: set[int] = set()
     for index, track in enumerate(returned):
         if not isinstance(track, Track):
@@ -88,6 +95,8 @@ def checked_tracks(returned: object, *, tracker: str, frame: int, cameras: tuple
         track_id = track.track_id
         if isinstance(track_id, bool) or not isinstance(track_id, Integral):
             raise TrackerFault(f"{where}: item {index}: track_id {track_id!r} is not an integer")
+        if not 0 <= int(track_id) <= MAX_TRACK_ID:
+            raise TrackerFault(f"{where}: item {index}: track_id {int(track_id)} is outside 0 … 2⁶³ − 1")
         place = f"{where}: track {int(track_id)}"
         if int(track_id) in seen:
             raise TrackerFault(f"{place}: track_id appears twice in this frame")
@@ -97,6 +106,8 @@ def checked_tracks(returned: object, *, tracker: str, frame: int, cameras: tuple
         score = track.score
         if isinstance(score, bool) or not isinstance(score, Real) or not math.isfinite(score):
             raise TrackerFault(f"{place}: score {score!r} is not a finite number")
+        if not 0.0 <= score <= 1.0:
+            raise TrackerFault(f"{place}: score {score!r} is outside 0 … 1 (a confidence)")
         if track.box3d is not None:
             _finite_box(track.box3d, Box3D, place, "box3d")
         if not isinstance(track.boxes2d, Mapping):

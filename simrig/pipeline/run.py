@@ -24,7 +24,6 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-import os
 import re
 import shlex
 import time
@@ -33,7 +32,9 @@ from pathlib import Path
 
 from simrig.dataset import Dataset
 from simrig.dataset.manifest import read_manifest, write_json_atomic
+from simrig.dataset.outputs import atomic_file, check_output_path, check_own_folder, write_text_atomic
 from simrig.errors import DatasetError, DatasetExistsError
+from simrig.names import path_part
 from simrig.pipeline.generate import generate
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
 from simrig.pipeline.track import TrackingRun, build_tracker, run_tracker
@@ -109,7 +110,9 @@ def run_pipeline(
     The tracker is built before generating, so a bad tracker name or parameter fails at once. ``overwrite``
     regenerates the dataset even when it matches (and replaces one that does not)."""
     loaded = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
-    out = Path(out) if out is not None else Path("runs") / f"{loaded.name}-seed{seed}"
+    out = Path(out) if out is not None else Path("runs") / f"{path_part(loaded.name, 'scenario name')}-seed{seed}"
+    check_output_path(out, what="--out")
+    check_own_folder(out, what="run folder", marker=DATASET_DIR)  # a run writes its dataset first
     build_tracker(tracker, params)  # checked early: a typo should not cost a generation
     frame_count = loaded.frames if frames is None else frames
     folder = out / DATASET_DIR
@@ -139,9 +142,8 @@ def run_pipeline(
     scores.mkdir(parents=True, exist_ok=True)
     json_path, errors_path, markdown = scores / "score.json", scores / "errors.parquet", scores / REPORT
     write_text_atomic(json_path, json.dumps(report.to_dict(), indent=2) + "\n")
-    partial = errors_path.with_name(f".{errors_path.name}.partial-{os.getpid()}")
-    report.write_errors(partial)
-    os.replace(partial, errors_path)
+    with atomic_file(errors_path) as partial:
+        report.write_errors(partial)
     command = _command(scenario, seed, tracker, params, frames, camera, images)
     write_text_atomic(markdown, f"## {loaded.name}, seed {seed}, tracker {tracker}\n\n"
                                  f"Produced by `{command}`.\n\n```\n{report.table()}\n```\n")
@@ -181,12 +183,6 @@ def _index(out: Path) -> str:
     return (f"# Tracker runs in this folder ({len(sections)})\n\nThe dataset in `{DATASET_DIR}/` is shared; each "
             f"run's tracks are in `{TRACKS_DIR}/LABEL/`, its scores in `{SCORES_DIR}/LABEL/`.\n\n"
             + "\n".join(sections))
-
-
-def write_text_atomic(path: Path, text: str) -> None:
-    partial = path.with_name(f".{path.name}.partial-{os.getpid()}")
-    partial.write_text(text, encoding="utf-8")
-    os.replace(partial, path)
 
 
 def _command(scenario, seed, tracker, params, frames, camera=None, images=False) -> str:

@@ -14,7 +14,15 @@ from pathlib import Path
 
 import simrig.trackers as tracker_registry
 from simrig.dataset import Dataset
-from simrig.dataset.tracks_file import TrackSet, TrackTables, tracks_in_memory, write_tracks
+from simrig.dataset.outputs import check_own_folder
+from simrig.dataset.tracks_file import (
+    TRACKS2D_FILE,
+    TRACKS3D_FILE,
+    TrackSet,
+    TrackTables,
+    tracks_in_memory,
+    write_tracks,
+)
 from simrig.errors import SimrigError
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S, TrackerFault, checked_tracks, time_limit
 from simrig.pipeline.trust import TrackerReferenceError, import_tracker_factory
@@ -59,6 +67,9 @@ def build_tracker(name, params: dict | None = None):
             built = name(**params)
         except TypeError as error:
             raise TrackingError(f"tracker {getattr(name, '__qualname__', name)!r}: {error}") from None
+        except (Exception, SystemExit) as error:  # the tracker's own code failed while being built
+            raise TrackingError(f"tracker {getattr(name, '__qualname__', name)!r}: building it raised "
+                                f"{type(error).__name__}: {error}") from error
         if not isinstance(built, tracker_registry.Tracker):
             raise TrackingError(f"tracker {getattr(name, '__qualname__', name)!r} built a {type(built).__name__}, "
                                 "which has no reset/step")
@@ -68,6 +79,8 @@ def build_tracker(name, params: dict | None = None):
     except (KeyError, ValueError, TypeError) as error:
         message = str(error.args[0] if error.args else error)
         raise TrackingError(message if repr(name) in message else f"tracker {name!r}: {message}") from None
+    except (Exception, SystemExit) as error:  # a registered (entry point) tracker's own code failed
+        raise TrackingError(f"tracker {name!r}: building it raised {type(error).__name__}: {error}") from error
 
 
 def _import(spec: str):
@@ -92,6 +105,8 @@ def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = No
     the tracker, the frame and the field."""
     if not isinstance(dataset, Dataset):
         dataset = Dataset.open(dataset)
+    if out is not None:  # before any work: a tracks folder holds tracks, never a user's other files
+        check_own_folder(Path(out), what="tracks folder", marker=TRACKS2D_FILE, made=(TRACKS3D_FILE, "tracker.json"))
     tracker = build_tracker(name, params)
     label = _display(name)
     cameras = dataset.rig.camera_names
@@ -145,7 +160,7 @@ def _guarded(tracker: str, call: str, seconds: float | None) -> Iterator[None]:
             yield
     except (TrackerFault, TrackerInputError):
         raise
-    except Exception as error:
+    except (Exception, SystemExit) as error:  # SystemExit: the tracker called exit(), which must not end simrig
         raise TrackerFault(f"tracker {tracker!r}: {call} raised {type(error).__name__}: {error}") from error
 
 

@@ -48,7 +48,16 @@ def check_file_reference(spec: object, *, trusted: bool, where: str, override: s
 
 
 def _has_tracker_methods(target: object) -> bool:
-    return isinstance(target, type) and all(callable(getattr(target, name, None)) for name in ("reset", "step"))
+    """A class with ``step`` and a ``reset`` that takes the rig (``reset(*, rig, seed)``, or ``**kwargs``):
+    a class that merely has methods of those names (a gymnasium ``Env``: ``reset(*, seed, options)``) is not
+    a tracker."""
+    if not isinstance(target, type) or not all(callable(getattr(target, name, None)) for name in ("reset", "step")):
+        return False
+    try:
+        parameters = inspect.signature(target.reset).parameters.values()
+    except (TypeError, ValueError):  # a builtin without a signature
+        return False
+    return any(p.name == "rig" or p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters)
 
 
 def is_tracker_factory(target: object) -> bool:

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..benchmark.api import BENCH_FILE
 from ..benchmark.results import CAMERAS, CAUSES, RESULTS
+from ..dataset.outputs import atomic_file, check_output_path, check_own_folder, write_text_atomic
 from ..explain.bench import EXPLAIN_TABLE
 from .cause_costs import cause_costs_section
 from .curves import curve_table, plot_sweep, plot_sweep_by_scenario
@@ -24,10 +25,13 @@ def write_report(results: Path | str, *, out: Path | str | None = None) -> Path:
     ``simrig report OUT`` makes it again). Returns the path of index.md."""
     bench = load_bench(results)
     out = Path(out) if out is not None else Path("reports") / bench.suite
+    check_output_path(out, what="--out")
+    check_own_folder(out, what="report folder", marker=BENCH_FILE)
     out.mkdir(parents=True, exist_ok=True)
     for name in (RESULTS, CAUSES, CAMERAS, BENCH_FILE, EXPLAIN_TABLE):
         if (bench.folder / name).is_file() and (bench.folder / name).resolve() != (out / name).resolve():
-            shutil.copyfile(bench.folder / name, out / name)
+            with atomic_file(out / name) as copy:
+                shutil.copyfile(bench.folder / name, copy)
     lines = _header(bench, out)
     lines += _results_section(bench)
     lines += _curves_section(bench, out)
@@ -35,7 +39,7 @@ def write_report(results: Path | str, *, out: Path | str | None = None) -> Path:
     lines += cause_costs_section(bench.folder, bench.suite, [entry["name"] for entry in bench.trackers])
     lines += _worst_section(bench, out)
     index = out / "index.md"
-    index.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_text_atomic(index, "\n".join(lines) + "\n")
     return index
 
 

@@ -16,6 +16,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from ..benchmark.results import PARAMETER_PREFIX  # noqa: E402
+from ..dataset.outputs import save_figure  # noqa: E402
 from .groups import Group  # noqa: E402
 from .load import BenchResults  # noqa: E402
 from .markdown import table  # noqa: E402
@@ -76,7 +77,7 @@ def plot_sweep(bench: BenchResults, parameter: str, groups: list[Group], out: Pa
     figure.suptitle(f"{bench.suite}: metrics against {parameter} (line: mean over seeds of the mean over "
                     "scenarios; band: lowest to highest seed)", fontsize=10)
     figure.tight_layout()
-    figure.savefig(out)
+    save_figure(figure, out)
     plt.close(figure)
     return out
 
@@ -110,7 +111,7 @@ def plot_sweep_by_scenario(bench: BenchResults, parameter: str, out: Path) -> Pa
     figure.suptitle(f"{bench.suite}: HOTA against {parameter} per scenario (dashed: scored on one camera)",
                     fontsize=10)
     figure.tight_layout()
-    figure.savefig(out)
+    save_figure(figure, out)
     plt.close(figure)
     return out
 

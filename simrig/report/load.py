@@ -13,6 +13,7 @@ from ..benchmark.api import BENCH_FILE
 from ..benchmark.results import CAMERAS, CAUSES, RESULTS
 from ..benchmark.suite import TrackerEntry
 from ..errors import SimrigError
+from ..reading import open_regular
 
 
 class ReportError(SimrigError):
@@ -53,7 +54,8 @@ def load_bench(path: Path | str) -> BenchResults:
         folder = folder.parent
     description_path = folder / BENCH_FILE
     try:
-        description = json.loads(description_path.read_text(encoding="utf-8"))
+        with open_regular(description_path, BENCH_FILE, ReportError) as handle:
+            description = json.loads(handle.read())
     except FileNotFoundError:
         raise ReportError(f"{str(folder)!r} is not a bench folder: it has no {BENCH_FILE}") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as error:

@@ -11,6 +11,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from simrig.dataset.outputs import write_text_atomic
 from simrig.scoring.attribution import IGNORED, errors_by_cause
 
 METRICS_3D = ("AMOTA", "AMOTP", "MOTAR", "MOTA", "MOTP", "RECALL", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN",
@@ -57,7 +58,7 @@ class ScoreReport:
         })
 
     def write_json(self, path: Path | str) -> None:
-        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
+        write_text_atomic(Path(path), json.dumps(self.to_dict(), indent=2) + "\n")
 
     def write_errors(self, path: Path | str) -> None:
         """Every error with its causes, as Parquet."""

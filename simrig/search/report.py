@@ -11,6 +11,7 @@ import numpy as np
 import pyarrow as pa
 
 from simrig.benchmark.results import write_table_atomic
+from simrig.dataset.outputs import save_figure, write_text_atomic
 
 from . import coverage
 from .evaluate import Estimate
@@ -75,7 +76,7 @@ def _plot(space: SearchSpace, streams: dict[str, list[Evaluation]], path: Path, 
     axis.legend()
     figure.text(0.01, 0.01, command, fontsize=6, color="gray")
     figure.tight_layout(rect=(0, 0.04, 1, 1))
-    figure.savefig(path)
+    save_figure(figure, path)
     plt.close(figure)
 
 
@@ -142,7 +143,7 @@ def write_report(space: SearchSpace, evaluations: dict[str, list[Evaluation]], f
                   f"- replay: `simrig replay {worst / 'worst.toml'}`",
                   f"- regression test: `pytest {worst / 'test_worst_case.py'}`",
                   "- kept reductions: " + ("; ".join(log["kept"]) or "none")]
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_text_atomic(path, "\n".join(lines) + "\n")
 
 
 def _number(value: float) -> str:

@@ -16,18 +16,20 @@ import shlex
 import time
 import warnings
 import zlib
-from concurrent.futures import Executor
+from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from simrig.benchmark.api import folder_lock
 from simrig.benchmark.engine_names import ENGINES
-from simrig.benchmark.engines import RayExecutor
+from simrig.benchmark.engines import RayExecutor, process_pool, stop_workers
 from simrig.benchmark.evaluate import METRIC_COLUMNS
+from simrig.names import path_part
+from simrig.reading import read_capped
 
 from ..dataset.manifest import write_json_atomic
+from ..dataset.outputs import check_output_path, check_own_folder, folder_lock
 from .evaluate import Estimate, run_seed
 from .fragments import Evaluation, read_evaluations, write_evaluation
 from .space import Candidate, SearchError, SearchSpace, load_space
@@ -79,10 +81,12 @@ def run_search(space: SearchSpace | str | Path, *, sampler: str = "tpe", seed: i
         raise SearchError(f"--workers {workers}: must be at least 1")
     if not isinstance(space, SearchSpace):
         space = load_space(space)
-    out = Path(out) if out is not None else Path("runs") / "search" / space.config.name
+    out = Path(out) if out is not None else Path("runs") / "search" / path_part(space.config.name, "search space name")
     cache = Path(cache) if cache is not None else out / "datasets"
+    check_output_path(out, what="--out")
+    check_own_folder(out, what="search folder", marker=SEARCH_FILE)
     out.mkdir(parents=True, exist_ok=True)
-    with folder_lock(out):
+    with folder_lock(out, "simrig search"):
         return _run(space, sampler, seed, (engine, workers, address), out, cache, baseline, shrink_budget,
                     stop_at_failure, progress, command)
 
@@ -102,7 +106,7 @@ def _run(space: SearchSpace, sampler: str, seed: int, engine: tuple[str, int, st
     settings = _settings(space, sampler, seed, baseline, stop_at_failure)
     previous = out / SEARCH_FILE
     if previous.exists():
-        recorded = json.loads(previous.read_text(encoding="utf-8"))
+        recorded = json.loads(read_capped(previous, SEARCH_FILE, SearchError))
         if {k: recorded.get(k) for k in settings} != settings:
             raise SearchError(f"search folder {str(out)!r} holds a search with other settings (space, tracker, "
                               "budget, sampler or seed); choose another --out")
@@ -127,6 +131,10 @@ def _run(space: SearchSpace, sampler: str, seed: int, engine: tuple[str, int, st
                 evaluated_now += count
             evaluations[CONFIRM], count = _confirm(space, evaluations[sampler], out, cache, pool, bar)
             evaluated_now += count
+    except KeyboardInterrupt:
+        if isinstance(pool, ProcessPoolExecutor):
+            stop_workers(pool)  # at once: the running evaluations' work is lost, the finished ones are kept
+        raise
     finally:
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
@@ -146,10 +154,7 @@ def _pool(engine: str, workers: int, address: str | None) -> Executor | None:
         return RayExecutor(workers, address)
     if workers == 1:
         return None
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
-    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    return process_pool(workers)
 
 
 def evaluate(space: SearchSpace, stream: str, index: int, candidate: Candidate, seeds: list[int], cache: Path,

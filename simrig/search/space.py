@@ -18,6 +18,7 @@ from pydantic import ValidationError
 from simrig.benchmark.evaluate import METRIC_COLUMNS
 from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
+from simrig.reading import read_capped
 from simrig.scenarios import Scenario, ScenarioError, describe_errors, load_scenario
 from simrig.scenarios.files import catalog_entry_or_file
 from simrig.scenarios.overrides import get_setting, with_setting
@@ -92,8 +93,9 @@ def load_space(name_or_path: str | Path, *, tracker: str | None = None, params: 
     path = _path(name_or_path)
     where = f"search space file {str(path)!r}"
     try:
-        with path.open("rb") as handle:
-            raw = tomllib.load(handle)
+        raw = tomllib.loads(read_capped(path, "search space file", SearchError).decode("utf-8"))
+    except UnicodeDecodeError as error:
+        raise SearchError(f"{where}: not UTF-8 text ({error})") from None
     except tomllib.TOMLDecodeError as error:
         raise SearchError(f"{where}: not valid TOML: {error}") from None
     raw.setdefault("name", path.stem)

@@ -13,6 +13,7 @@ import json
 from pathlib import Path
 
 from simrig.dataset.manifest import write_json_atomic
+from simrig.dataset.outputs import write_text_atomic
 from simrig.testing.replay import write_replay
 
 from .evaluate import score_seed
@@ -104,7 +105,7 @@ def write_worst(space: SearchSpace, evaluations: dict[str, list[Evaluation]], fo
         frames=shrunk.scenario.frames, metric=metric, relation=relation, threshold=threshold, seed=seed,
         test=TEST, replay=REPLAY, slug="".join(c if c.isalnum() else "_" for c in space.config.name),
         threshold_name="AT_LEAST" if relation == ">=" else "AT_MOST", operator=relation)
-    (folder / TEST).write_text(test, encoding="utf-8")
+    write_text_atomic(folder / TEST, test)
     write_json_atomic(log_path, {
         "source": source, "seed": seed, "kept": shrunk.kept, "evaluations": shrunk.evaluations,
         "before": {"actors": actor_count(start), "frames": start.frames,

@@ -19,6 +19,7 @@ from simrig.scenarios import describe_errors
 from simrig.scenarios.files import read_toml, validate_strict
 from simrig.scenarios.schema import Scenario
 
+from ..dataset.outputs import write_text_atomic
 from ..errors import SimrigError
 from ..pipeline.trust import TrackerReferenceError, check_file_reference
 from ..scoring import ScoreReport
@@ -66,7 +67,7 @@ def write_replay(path: Path | str, scenario: Scenario, seed: int, *, tracker: st
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     header = "# simrig replay file: `simrig replay THIS_FILE` reruns the scenario below with the tracker.\n"
-    path.write_text(header + tomli_w.dumps(document), encoding="utf-8")
+    write_text_atomic(path, header + tomli_w.dumps(document))
     return path
 
 
