@@ -1,6 +1,6 @@
 """The scenario catalog and loader.
 
-A scenario is a TOML file validated by :class:`scenarios.schema.Scenario`. Catalog entries live next to
+A scenario is a TOML file validated by :class:`simrig.scenarios.schema.Scenario`. Catalog entries live next to
 this module (``scenarios/<name>.toml``). A user's file may start from a catalog entry with
 ``extends = "name"`` and override only what it changes; tables are merged key by key, other values are
 replaced.
@@ -21,6 +21,7 @@ if TYPE_CHECKING:
     from .schema import Scenario
 
 from .files import read_toml, validate_strict
+from .merge import merge
 
 CATALOG_DIR = Path(__file__).resolve().parent
 SUITES_DIR = CATALOG_DIR / "suites"
@@ -59,17 +60,6 @@ def _read_toml(path: Path) -> dict[str, Any]:
     return read_toml(path, "scenario file", ScenarioError)
 
 
-def _merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
-    """``override`` on top of ``base``: tables merge key by key, everything else is replaced."""
-    out = dict(base)
-    for key, value in override.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = _merge(out[key], value)
-        else:
-            out[key] = value
-    return out
-
-
 def _resolve(path: Path, chain: tuple[Path, ...]) -> dict[str, Any]:
     """The raw dict of ``path`` with its ``extends`` chain merged in (parents first)."""
     if path in chain:
@@ -89,7 +79,7 @@ def _resolve(path: Path, chain: tuple[Path, ...]) -> dict[str, Any]:
         )
     base = _resolve(entries[parent], (*chain, path))
     base.pop("name", None)  # a derived scenario is named by its own file
-    return _merge(base, raw)
+    return merge(base, raw)
 
 
 MAX_ERRORS_LISTED = 10

@@ -167,9 +167,9 @@ class Scenario(Strict):
     render: RenderConfig = Field(default_factory=RenderConfig)
     sensor: SensorConfig = Field(default_factory=SensorConfig)
     perturbations: tuple[Perturbation, ...] = ()
-    """Scheduled perturbations (:mod:`scenarios.perturbation_schema`), applied in the order given."""
+    """Scheduled perturbations (:mod:`simrig.scenarios.perturbation_schema`), applied in the order given."""
     evaluation: EvaluationConfig = Field(default_factory=EvaluationConfig)
-    """Which 2D ground truth is scored (:mod:`scenarios.evaluation_schema`); changes no dataset byte but the
+    """Which 2D ground truth is scored (:mod:`simrig.scenarios.evaluation_schema`); changes no dataset byte but the
     resolved scenario stored with it."""
 
     @property

@@ -21,6 +21,8 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from .merge import merge
+
 _NO_NOISE = {"depth_sigma_m": 0.0, "depth_sigma_per_m": 0.0, "lateral_sigma_m": 0.0, "size_sigma": 0.0,
              "yaw_sigma_deg": 0.0, "yaw_flip_probability": 0.0, "velocity_sigma_mps": 0.0}
 
@@ -82,9 +84,7 @@ def merge_tables(base: dict[str, Any], override: dict[str, Any]) -> dict[str, An
     """``override`` on top of ``base``, tables merged key by key (the scenario loader's rule). ``base`` is taken as
     a file would give it (pairs as lists): scenarios are validated strictly with JSON's rules, where a tuple is
     not an array."""
-    from . import _merge
-
-    return _merge(json.loads(json.dumps(base)), override)
+    return merge(json.loads(json.dumps(base)), override)
 
 
 def with_preset(raw: dict[str, Any]) -> dict[str, Any]:

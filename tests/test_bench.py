@@ -17,7 +17,7 @@ from simrig.scenarios import load_scenario
 
 from simrig.benchmark import BenchError, run_bench
 from simrig.benchmark.parameters import apply_parameter
-from simrig.pipeline.cache import dataset_key
+from simrig.pipeline.content_keys import dataset_key
 from simrig.pipeline.generate import generate
 from simrig.pipeline.track import run_tracker
 from simrig.report import ReportError, write_report

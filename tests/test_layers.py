@@ -112,3 +112,82 @@ def test_the_checker_sees_relative_and_function_level_imports(tmp_path: Path) ->
     source = tmp_path / "probe.py"
     source.write_text("def f():\n    from ..scoring import hota\n    from simrig.pipeline import run\n")
     assert imported("simrig.sensor.probe", source) >= {"simrig.scoring", "simrig.scoring.hota", "simrig.pipeline.run"}
+
+
+def runtime_imported(module: str, path: Path) -> set[str]:
+    """The simrig modules importing ``module`` executes: as :func:`imported`, without imports under
+    ``if TYPE_CHECKING:`` (never run) and without ``module``'s own packages (running already when it is
+    imported); ``from package import submodule`` names the submodule only."""
+    is_package = path.name == "__init__.py"
+    package = module if is_package else module.rpartition(".")[0]
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    guards = [node for node in ast.walk(tree) if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)]
+    unrun = {id(inner) for guard in guards for statement in guard.body for inner in ast.walk(statement)}
+    known = modules()
+    found = set()
+    for node in ast.walk(tree):
+        if id(node) in unrun:
+            continue
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                target = ".".join(base[: len(base) - (node.level - 1)] + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            submodules = {f"{target}.{alias.name}" for alias in node.names} & set(known)
+            found |= submodules
+            if len(submodules) < len(node.names):
+                found.add(target)
+    own_packages = {module.rsplit(".", k)[0] for k in range(1, module.count(".") + 1)}
+    return {name for name in found if name in known and name != module and name not in own_packages}
+
+
+def import_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    cycles: list[list[str]] = []
+
+    def visit(module: str) -> None:
+        index[module] = low[module] = len(index)
+        stack.append(module)
+        on_stack.add(module)
+        for target in sorted(graph.get(module, ())):
+            if target not in index:
+                visit(target)
+                low[module] = min(low[module], low[target])
+            elif target in on_stack:
+                low[module] = min(low[module], index[target])
+        if low[module] == index[module]:
+            component = []
+            while True:
+                member = stack.pop()
+                on_stack.discard(member)
+                component.append(member)
+                if member == module:
+                    break
+            if len(component) > 1:
+                cycles.append(sorted(component))
+
+    for module in sorted(graph):
+        if module not in index:
+            visit(module)
+    return cycles
+
+
+def test_no_import_cycle_between_modules_counting_imports_inside_functions() -> None:
+    graph = {module: runtime_imported(module, path) for module, path in modules().items()}
+    assert import_cycles(graph) == []
+
+
+def test_the_cycle_finder_finds_a_cycle_through_a_function_level_import(tmp_path: Path) -> None:
+    first, second = tmp_path / "first.py", tmp_path / "second.py"
+    first.write_text("from simrig.pipeline import generate\n")
+    second.write_text("def later():\n    from simrig.pipeline.cache import cached_dataset\n")
+    graph = {"simrig.pipeline.cache": runtime_imported("simrig.pipeline.cache", first),
+             "simrig.pipeline.generate": runtime_imported("simrig.pipeline.generate", second)}
+    assert import_cycles(graph) == [["simrig.pipeline.cache", "simrig.pipeline.generate"]]

@@ -11,7 +11,8 @@ from simrig.scenarios.overrides import with_setting
 
 from simrig.dataset import Dataset
 from simrig.errors import DatasetError
-from simrig.pipeline.cache import cached_dataset, world_key
+from simrig.pipeline.cache import cached_dataset
+from simrig.pipeline.content_keys import world_key
 from simrig.pipeline.generate import generate
 
 

@@ -1,7 +1,7 @@
 """Per-camera 2D tracking: one single-camera tracker per camera of the rig, run independently.
 
 A single-camera tracker (``sort``, ``deepsort``) works on one camera's detections and reports
-:class:`LocalTrack`\\ s; :class:`PerCameraTracking` makes a rig-level :class:`~tracker.protocol.Tracker` of it
+:class:`LocalTrack`\\ s; :class:`PerCameraTracking` makes a rig-level :class:`~simrig.trackers.protocol.Tracker` of it
 whose output tracks carry one pixel box each, for the camera that saw them.
 """
 
@@ -24,7 +24,7 @@ class LocalTrack:
     """What a single-camera tracker reports for one track at one frame.
 
     track_id: unique within the camera; box: ``(4,)`` pixel box (x1, y1, x2, y2) [px]; score: the confidence
-    in [0, 1]; label: class code into :data:`~tracker.detections.LABELS`; detection: the row, in the camera's
+    in [0, 1]; label: class code into :data:`~simrig.trackers.detections.LABELS`; detection: the row, in the camera's
     detections of this frame, that updated the track (−1 when the box is the filter's prediction).
     """
 
@@ -44,7 +44,7 @@ class CameraTracker(Protocol):
 
 class FrameCounter:
     """Frames elapsed between calls, from the frame index (dropped frames count), checked by a
-    :class:`~tracker.clock.FrameClock`."""
+    :class:`~simrig.trackers.clock.FrameClock`."""
 
     def __init__(self) -> None:
         self.clock = FrameClock()

@@ -20,7 +20,7 @@ in, and lives and dies by its score (§3.4). Without the learned decoder, the sa
    (``reports/trackers/mutr3d.md``). The image costs stay as options;
 4. update each track in 3D with the 3D boxes of the detections every camera matched to it (sequential
    updates, as the other Kalman trackers);
-5. life: MUTR3D's query life management (:class:`~tracker.life.QueryLife`): start at score ≥ τ_new = 0.4,
+5. life: MUTR3D's query life management (:class:`~simrig.trackers.life.QueryLife`): start at score ≥ τ_new = 0.4,
    die after T = 5 successive frames below τ_old = 0.35 (``life="mutr3d"``, §3.4) or by the public code's
    count (``life="mutr3d_code"``), reported while the frame's score ≥ τ_old. Unmatched detections of one
    new object seen by two cameras start one track (``birth_merge_m``).

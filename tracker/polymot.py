@@ -16,7 +16,7 @@ What it takes from them, and every choice where simrig had to pick (none of it i
 2. **Category-specific motion** (Poly-MOT, Fast-Poly): extended Kalman filters — CTRA for cars, trucks and
    buses, the bicycle-like constant-curvature model for motorcycles (:mod:`.turning_motion`).
 3. **Multi-cue cost** (Poly-MOT's multi-cue association, MCTrack's rotated GIoU with a distance term):
-   (1 − GIoU_bev) + d²/ρ² + ½ (1 − |cos Δθ|), pre-filtered at 6 m (:class:`~tracker.cost_models.MultiCueCost`),
+   (1 − GIoU_bev) + d²/ρ² + ½ (1 − |cos Δθ|), pre-filtered at 6 m (:class:`~simrig.trackers.cost_models.MultiCueCost`),
    +inf across classes; gate 1.5.
 4. **Two-stage association with a score split** (ByteTrack's idea, as Fast-Poly and MCTrack use two stages):
    detections with score ≥ ``score_high`` (0.5) against every track (Hungarian, gate ``gate``); then the

@@ -20,7 +20,7 @@ from .settings import kalman_tracker_parts
 class SagaTrack(KalmanTracker):
     """The Kalman coordinator with FOTA as its assignment. gamma, iterations, track_mass: FOTA's γ, T and
     track mass; one_per_camera: a track takes at most one detection of each camera per frame (enforced in
-    FOTA's decoding, :func:`~tracker.fota.fota`)."""
+    FOTA's decoding, :func:`~simrig.trackers.fota.fota`)."""
 
     def __init__(self, *, gamma: float, iterations: int, track_mass: float, one_per_camera: bool, **kw):
         super().__init__(assign=self._unused, **kw)
@@ -54,7 +54,7 @@ def saga(
     measurement_variance: float = 1.0,
     one_per_camera: bool = True,
 ) -> SagaTrack:
-    """SAGA-Track with FOTA. cost: a name from :data:`~tracker.cost_models.COST_MODELS`; gate: its gate
+    """SAGA-Track with FOTA. cost: a name from :data:`~simrig.trackers.cost_models.COST_MODELS`; gate: its gate
     (model default when None); gamma, iterations, track_mass: FOTA's γ, T and track mass; life: ``hits``
     or ``mutr3d``; min_hits, max_age_s: the ``hits`` rule; birth_merge_m [m]: detections of one new object
     from two cameras start one track; duplicate_iou: tracks overlapping by this BEV IoU are one object, the

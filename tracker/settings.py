@@ -33,7 +33,7 @@ def build_kalman(measurement_variance: float) -> KalmanConfig:
 
 def kalman_tracker_parts(*, cost: str, gate: float | None, life: str, min_hits: int, max_age_s: float,
                          measurement_variance: float, score_threshold: float, **cost_extra) -> dict:
-    """Keyword arguments of :class:`~tracker.kalman_tracker.KalmanTracker` every reference tracker shares:
+    """Keyword arguments of :class:`~simrig.trackers.kalman_tracker.KalmanTracker` every reference tracker shares:
     the cost model, the life rule, the filter settings and the score threshold."""
     return {
         "cost": build_cost(cost, gate, **cost_extra),

@@ -48,7 +48,7 @@ def parameter_value(scenario: Scenario, parameter: str) -> float:
 
 
 def apply_parameter(scenario: Scenario, parameter: str, value: float) -> Scenario:
-    """``scenario`` with ``parameter`` set to ``value`` (validated; a :class:`~scenarios.ScenarioError` if the
+    """``scenario`` with ``parameter`` set to ``value`` (validated; a :class:`~simrig.scenarios.ScenarioError` if the
     value or the setting does not fit the scenario). An integer setting keeps integer values."""
     alias = ALIASES.get(parameter)
     path = alias.path if alias else parameter

@@ -1,7 +1,7 @@
 """A suite expanded into points (rows of the results table) and cells (what is generated and tracked).
 
 A **point** is (scenario, sweep, value, seed): the base settings or one swept value. A **cell** is the
-dataset a point needs, keyed by content (:func:`~simrig.pipeline.cache.dataset_key`): two points with the same
+dataset a point needs, keyed by content (:func:`~simrig.pipeline.content_keys.dataset_key`): two points with the same
 resolved scenario — a sweep value equal to the scenario's own setting, say — share one cell, which is
 generated and tracked once and reported under both.
 """
@@ -13,7 +13,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from simrig.pipeline.cache import dataset_key, world_key
+from simrig.pipeline.content_keys import dataset_key, world_key
 from simrig.scenarios import Scenario
 
 from .parameters import apply_parameter, parameter_value
@@ -84,7 +84,7 @@ class Plan:
 
     def jobs(self, finished: set[tuple[str, str]], cache: Path) -> list[Job]:
         """The cells with trackers not yet in ``finished`` (a set of (cell, tracker key)): the first cell of
-        each world (:func:`~simrig.pipeline.cache.world_key`) in plan order, then the cells that share a world
+        each world (:func:`~simrig.pipeline.content_keys.world_key`) in plan order, then the cells that share a world
         with an earlier one (detector sweeps), so that by the time those start their world is likely in the
         cache and only the sensor model runs. Results are written in plan order whatever the run order."""
         first, later, worlds = [], [], set()

@@ -11,17 +11,13 @@ from __future__ import annotations
 
 import json
 import shutil
-from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
-from simrig.dataset.tracks_file import TrackRows, TrackSet, read_tracks
-from simrig.scenarios.evaluation_schema import EvaluationConfig
+from simrig.dataset.tracks_file import TrackSet, read_tracks
 
 from ..dataset import Dataset
 from ..dataset.evaluation import evaluation_of, ignore_rules
-from ..dataset.ground_truth import GroundTruth, project_tracks
+from ..dataset.ground_truth import project_tracks
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import (
     PARTIAL_MARKER,
@@ -31,33 +27,12 @@ from ..dataset.outputs import (
     publish,
     remove_stale_partials,
 )
-from ..errors import SimrigError
 from ..reading import read_capped
-
-
-class ExportError(SimrigError):
-    """An export could not be written (unknown format, output folder in the way)."""
-
-
-@dataclass(frozen=True, eq=False)
-class ExportInput:
-    """What every format gets: the dataset, its ground truth, the :class:`~simrig.dataset.evaluation.IgnoreRule`
-    bits of every box ``(R, C)`` (what ``simrig score`` ignores with the same settings), and the tracker's rows
-    (``None`` without ``--tracks``): ``rows2d`` as the scorer compares them, ``rows3d`` when the tracker gave 3D
-    boxes."""
-
-    dataset: Dataset
-    truth: GroundTruth
-    evaluation: EvaluationConfig
-    ignored: np.ndarray
-    rows2d: TrackRows | None
-    rows3d: TrackRows | None
-    tracker_name: str
+from . import kitti, motchallenge, nuscenes
+from .input import ExportError, ExportInput
 
 
 def _formats():
-    from . import kitti, motchallenge, nuscenes
-
     return {"motchallenge": motchallenge.write, "kitti": kitti.write, "nuscenes": nuscenes.write}
 
 

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .api import ExportInput
+from .input import ExportInput
 
 KITTI_TYPE = {"car": "Car", "truck": "Truck", "bus": "Misc", "motorcycle": "Cyclist", "pedestrian": "Pedestrian",
               "bicycle": "Cyclist"}

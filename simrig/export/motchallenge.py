@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..dataset.evaluation import KEEPS_MATCHES
-from .api import ExportInput
+from .input import ExportInput
 
 BENCHMARK, SPLIT = "SIMRIG", "test"
 EVALUATED_CLASS, DISTRACTOR_CLASS = 1, 8

@@ -38,7 +38,7 @@ import numpy as np
 
 from simrig.dataset.tracks_nuscenes import sample_token
 
-from .api import ExportError, ExportInput
+from .input import ExportError, ExportInput
 
 META = {"use_camera": True, "use_lidar": False, "use_radar": False, "use_map": False, "use_external": False}
 VERSION, SPLIT = "v1.0-simrig", "simrig"

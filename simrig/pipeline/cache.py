@@ -7,68 +7,16 @@ leaves no folder that looks complete and the next call generates it again.
 
 from __future__ import annotations
 
-import hashlib
-import json
 from pathlib import Path
 
 from simrig.dataset.outputs import write_text_atomic
 from simrig.dataset.reader import Dataset
 from simrig.errors import DatasetError, DatasetExistsError
+from simrig.pipeline.content_keys import dataset_key, world_key
 from simrig.scenarios import Scenario
-from simrig.version import __version__
 
-KEY_LENGTH = 20
-"""[hex digits] of the SHA-256 kept in a key (80 bits)."""
-
-
-def dataset_key(scenario: Scenario, seed: int, frames: int | None) -> str:
-    """The content key of (``scenario``, ``seed``, ``frames``); ``frames`` None means the scenario's own.
-
-    >>> from simrig.scenarios import load_scenario
-    >>> s = load_scenario("highway_surround6")
-    >>> dataset_key(s, 0, None) == dataset_key(s, 0, s.frames) != dataset_key(s, 1, None)
-    True
-    """
-    identity = {
-        "scenario": scenario.model_dump(mode="json"),
-        "seed": int(seed),
-        "frames": int(scenario.frames if frames is None else frames),
-        "simrig": __version__,
-    }
-    text = json.dumps(identity, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()[:KEY_LENGTH]
-
-
-NOT_WORLD = ("name", "description", "sensor", "evaluation")
-"""Scenario keys that change what the detector reports or how it is scored, never the world it sees."""
 WORLDS_FOLDER = "worlds"
 """Under a cache root: one small file per world key naming a complete dataset of that world."""
-
-
-def world_key(scenario: Scenario, seed: int, frames: int | None) -> str:
-    """The content key of what a dataset's world is: traffic, rig, rendering, world perturbations (with their
-    positions in the list, which seed their scripted vehicles), seed and frame count — everything but the
-    detector. Two datasets with the same world key differ only in what the sensor model made of one world, so
-    one can be made from the other without simulating or rendering (``generate(..., world_from=...)``).
-
-    >>> from simrig.scenarios import load_scenario
-    >>> from simrig.scenarios.overrides import with_setting
-    >>> s = load_scenario("highway_surround6")
-    >>> world_key(s, 0, None) == world_key(with_setting(s, "sensor.detection.probability", 0.5), 0, None)
-    True
-    >>> world_key(s, 0, None) == world_key(with_setting(s, "rig.overlap_deg", 0.0), 0, None)
-    False
-    """
-    from simrig.scenarios.perturbation_schema import WORLD_KINDS
-
-    dumped = scenario.model_dump(mode="json")
-    identity = {key: value for key, value in dumped.items() if key not in NOT_WORLD and key != "perturbations"}
-    identity["perturbations"] = [(index, p) for index, (p, model) in enumerate(
-        zip(dumped["perturbations"], scenario.perturbations, strict=True)) if model.kind in WORLD_KINDS]
-    identity |= {"seed": int(seed), "frames": int(scenario.frames if frames is None else frames),
-                 "simrig": __version__}
-    text = json.dumps(identity, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()[:KEY_LENGTH]
 
 
 def cached_dataset(scenario: Scenario, seed: int, frames: int | None, root: Path | str) -> Dataset:

@@ -17,6 +17,7 @@ from simrig.dataset.manifest import IMAGES_FOLDER, package_versions
 from simrig.dataset.tables import frame_columns
 from simrig.errors import DatasetError
 from simrig.geometry import Projection, project_boxes
+from simrig.pipeline.content_keys import world_key
 from simrig.pipeline.recorded_world import RecordedWorld
 from simrig.render.visibility import Visibility
 from simrig.rig import build_rig, rig_to_dict
@@ -69,7 +70,7 @@ def generate(
     holds a complete dataset and ``overwrite`` is false, and :class:`~simrig.scenarios.ScenarioError` for a
     perturbation naming a camera the rig lacks (both checked before any simulation work).
 
-    ``world_from``: a dataset of the same world (same :func:`~simrig.pipeline.cache.world_key`: traffic, rig,
+    ``world_from``: a dataset of the same world (same :func:`~simrig.pipeline.content_keys.world_key`: traffic, rig,
     rendering, world perturbations, seed and frames; only the detector's settings and sensor perturbations may
     differ). Its traffic and measured visibility are reused and only the sensor model runs — the files are
     byte-identical to a full generation, in a fraction of the time (no simulation, no rendering).
@@ -78,8 +79,6 @@ def generate(
     dataset whose every other random draw is the one of the dataset with all causes on; its manifest records
     them under ``removed_causes`` (absent when none are removed).
     """
-    from simrig.pipeline.cache import world_key
-
     frames = scenario.frames if frames is None else frames
     if not isinstance(frames, int) or frames < 1:
         raise ValueError(f"frames: must be a positive integer, got {frames!r}")

@@ -16,6 +16,7 @@ from simrig.dataset.outputs import save_figure, write_text_atomic
 from . import coverage
 from .evaluate import Estimate
 from .fragments import Evaluation
+from .ranking import CONFIRM, fails
 from .space import SearchSpace
 
 PARAMETER_PREFIX = "param."
@@ -29,8 +30,6 @@ def _names(space: SearchSpace) -> list[str]:
 def write_results(space: SearchSpace, evaluations: dict[str, list[Evaluation]], path: Path) -> None:
     """``results.parquet``: stream, index, every parameter, seeds, the objective's mean and confidence interval,
     the failure metric's mean, whether it failed, and the wall time."""
-    from .run import fails
-
     objective = space.config.objective
     rows = []
     for stream, items in evaluations.items():
@@ -84,8 +83,6 @@ def write_report(space: SearchSpace, evaluations: dict[str, list[Evaluation]], f
                  path: Path, command: str, sampler: str, worst: Path | None) -> None:
     """``report.md`` with the objective over evaluations (a table and ``objective.png``), the first failing
     evaluation of each stream, the re-evaluated best candidates with confidence intervals, and the worst case."""
-    from .run import CONFIRM, fails
-
     config = space.config
     objective = config.objective
     streams = {s: items for s, items in evaluations.items() if s != CONFIRM}

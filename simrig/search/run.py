@@ -30,12 +30,12 @@ from simrig.reading import read_capped
 
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import check_output_path, check_own_folder, folder_lock
-from .evaluate import Estimate, run_seed
+from .evaluate import run_seed
 from .fragments import Evaluation, read_evaluations, write_evaluation
+from .ranking import CONFIRM, best_candidates, fails, first_failure, objective_of
 from .space import Candidate, SearchError, SearchSpace, load_space
 
 SAMPLERS = ("tpe", "cmaes", "random")
-CONFIRM = "confirm"
 SEARCH_FILE = "search.json"
 RESULTS = "results.parquet"
 REPORT = "report.md"
@@ -192,23 +192,6 @@ def _plain(candidate: Candidate) -> dict:
     return {k: v.item() if isinstance(v, np.generic) else v for k, v in candidate.items()}
 
 
-def objective_of(space: SearchSpace, evaluation: Evaluation) -> Estimate:
-    return Estimate.of(evaluation.values(space.config.objective.metric))
-
-
-def fails(space: SearchSpace, evaluation: Evaluation) -> bool:
-    """Whether the mean of the failure metric over the evaluation's seeds is past the threshold."""
-    failure = space.config.objective.failure
-    if failure is None:
-        return False
-    return failure.fails(Estimate.of(evaluation.values(space.config.objective.failure_metric)).mean)
-
-
-def first_failure(space: SearchSpace, evaluations: list[Evaluation]) -> int | None:
-    """The 1-based number of the first failing evaluation, None when none failed."""
-    return next((e.index + 1 for e in evaluations if fails(space, e)), None)
-
-
 def _distributions(space: SearchSpace) -> dict:
     from optuna.distributions import CategoricalDistribution, FloatDistribution, IntDistribution
 
@@ -298,20 +281,6 @@ def _search_stream(space: SearchSpace, stream: str, seed: int, out: Path, cache:
             bar.update(space.config.budget - index - 1)
             break
     return evaluations, count
-
-
-def best_candidates(space: SearchSpace, evaluations: list[Evaluation], count: int) -> list[Evaluation]:
-    """The ``count`` best distinct candidates by mean objective (NaN last; ties by index)."""
-    sign = -1.0 if space.config.objective.direction == "maximize" else 1.0
-    ranked = sorted(evaluations, key=lambda e: (math.isnan(objective_of(space, e).mean),
-                                                sign * np.nan_to_num(objective_of(space, e).mean), e.index))
-    chosen, seen = [], set()
-    for evaluation in ranked:
-        key = repr(sorted(evaluation.candidate.items()))
-        if key not in seen:
-            seen.add(key)
-            chosen.append(evaluation)
-    return chosen[:count]
 
 
 def _confirm(space: SearchSpace, searched: list[Evaluation], out: Path, cache: Path, pool, bar

@@ -18,6 +18,7 @@ from simrig.testing.replay import write_replay
 
 from .evaluate import score_seed
 from .fragments import Evaluation
+from .ranking import best_candidates, fails
 from .shrink import actor_count, shrink
 from .space import SearchSpace
 
@@ -60,8 +61,6 @@ def test_worst_case_of_{slug}():
 
 
 def _worst_failing(space: SearchSpace, evaluations: dict[str, list[Evaluation]]) -> Evaluation | None:
-    from .run import best_candidates, fails
-
     failing = [e for stream, items in evaluations.items() if stream != "confirm" for e in items if fails(space, e)]
     chosen = best_candidates(space, failing, 1)
     return chosen[0] if chosen else None

@@ -33,7 +33,7 @@ class SensorBatch:
     occlusion; 0 where unknown or hidden) and ``distance`` [m] from the camera's optical centre to the box
     centre, ``in_view`` — each ``(C, N)``.
 
-    Effects then set ``probability`` (of a detection), ``causes`` (:class:`~.causes.Cause` bit masks),
+    Effects then set ``probability`` (of a detection), ``causes`` (:class:`~simrig.causes.Cause` bit masks),
     ``noise_factor`` — each ``(C, N)`` — and per camera ``yaw_offset`` [rad] and ``silenced`` (no output at
     all, not even clutter) ``(C,)``; draw ``detected`` and fill the outputs of detected actors:
     ``det_boxes2d`` ``(C, N, 4)``, ``det_boxes3d`` ``(C, N, 9)``, ``scores``, ``embeddings`` ``(C, N, D)``

@@ -171,7 +171,7 @@ class Monocular3D(_Random):
     two-state flip chain is on; velocity gets e_v · σ_v(d) per component. Every e is a unit-variance
     Ornstein–Uhlenbeck process per (actor, camera) (:class:`.processes.GaussMarkov`), optionally mixed
     with a per-actor one shared by all cameras; σ(d) = σ · (1 + d / D) for the errors other than depth
-    (:class:`~scenarios.sensor_schema.Box3DNoiseConfig`). All σ are multiplied by the actor's noise factor.
+    (:class:`~simrig.scenarios.sensor_schema.Box3DNoiseConfig`). All σ are multiplied by the actor's noise factor.
     A calibration yaw offset then rotates centre, yaw and velocity about the vertical axis through the
     camera (the detector lifts to the world with the wrong extrinsics)."""
 

@@ -1,5 +1,5 @@
 """Scheduled sensor perturbations as effects: each checks its window, cameras and actors, and changes one
-thing in the batch (see :mod:`scenarios.perturbation_schema` for the scenario keys)."""
+thing in the batch (see :mod:`simrig.scenarios.perturbation_schema` for the scenario keys)."""
 
 from __future__ import annotations
 

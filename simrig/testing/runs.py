@@ -13,7 +13,8 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from simrig.pipeline.cache import cached_dataset, dataset_key
+from simrig.pipeline.cache import cached_dataset
+from simrig.pipeline.content_keys import dataset_key
 from simrig.pipeline.track import run_tracker as run_on_dataset
 from simrig.scenarios.schema import Scenario
 

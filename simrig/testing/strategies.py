@@ -47,7 +47,7 @@ def perturbations(draw, frames: int, kinds: tuple[str, ...] = ("occlude", "miss_
 def scenarios(draw, *, rigs: tuple[str, ...] = RIGS, max_frames: int = 15, max_vehicles: int = 8,
               max_perturbations: int = 2, noise: bool = True, clutter: bool = True, render: bool = False,
               perfect: bool = False) -> Scenario:
-    """A valid :class:`~scenarios.schema.Scenario`. ``perfect`` draws a detector that sees every actor in view
+    """A valid :class:`~simrig.scenarios.schema.Scenario`. ``perfect`` draws a detector that sees every actor in view
     exactly (no noise, misses, clutter or perturbations)."""
     frames = draw(st.integers(2, max_frames))
     rig = draw(st.sampled_from(rigs))

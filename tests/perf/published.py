@@ -22,7 +22,7 @@ def cached_dataset(scenario: str, seed: int, frames: int, data: Path, *, preset:
     another scenario (a catalog or preset change since); ``preset``: the catalog scenario with that detector preset
     (``[sensor] preset``) instead of its own detector. A dataset of the same world made with another detector is
     reused for its traffic and visibility (only the detector reruns)."""
-    from simrig.pipeline.cache import world_key
+    from simrig.pipeline.content_keys import world_key
 
     out = data / f"{scenario}{'' if preset is None else '-' + preset}-seed{seed}-{frames}f"
     with tempfile.TemporaryDirectory() as tmp:
