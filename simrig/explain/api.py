@@ -144,11 +144,11 @@ class Game:
         for i, name in enumerate(chosen):
             share = {p: float(self.shares[p][i]) for p in self.players}
             gap = float(self.perfect[i] - self.actual[i])
-            entry = {"dimension": chosen[name][0], "actual": _number(self.actual[i]),
-                     "perfect": _number(self.perfect[i]), "shares": {p: _number(v) for p, v in share.items()},
-                     "residual": _number(gap - sum(share.values()))}
+            entry = {"dimension": chosen[name][0], "actual": _json_number(self.actual[i]),
+                     "perfect": _json_number(self.perfect[i]), "shares": {p: _json_number(v) for p, v in share.items()},
+                     "residual": _json_number(gap - sum(share.values()))}
             if self.half is not None:
-                entry["ci95"] = {p: _number(self.half[p][i]) for p in self.players}
+                entry["ci95"] = {p: _json_number(self.half[p][i]) for p in self.players}
             out[name] = entry
         return out
 
@@ -375,7 +375,8 @@ def _document(scenario: str, dataset: Dataset, label: str, record: dict, chosen:
     }
 
 
-def _number(value) -> float | None:
+def _json_number(value) -> float | None:
+    """A float for the JSON document, None (null) for NaN."""
     value = float(value)
     return None if np.isnan(value) else value
 

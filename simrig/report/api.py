@@ -10,11 +10,11 @@ from ..benchmark.api import BENCH_FILE
 from ..benchmark.results import CAMERAS, CAUSES, RESULTS
 from ..dataset.outputs import atomic_file, check_output_path, check_own_folder, write_text_atomic
 from ..explain.bench import EXPLAIN_TABLE
+from ..markdown import table
 from .cause_costs import cause_costs_section
 from .curves import curve_table, plot_sweep, plot_sweep_by_scenario
 from .groups import groups
 from .load import BenchResults, load_bench
-from .markdown import table
 from .summary import camera_table, causes_table, paired_table, scenario_table, tracker_table
 from .worst_cell import inspect_worst
 

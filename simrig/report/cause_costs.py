@@ -8,7 +8,7 @@ from pathlib import Path
 import pyarrow.parquet as pq
 
 from ..explain.bench import EXPLAIN_TABLE, not_explained
-from .markdown import table
+from ..markdown import table
 
 HEADLINE_METRIC = "HOTA"
 """The metric each tracker's one-line summary names (2D HOTA: every tracker has it)."""

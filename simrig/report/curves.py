@@ -17,9 +17,9 @@ import pandas as pd  # noqa: E402
 
 from ..benchmark.results import PARAMETER_PREFIX  # noqa: E402
 from ..dataset.outputs import save_figure  # noqa: E402
+from ..markdown import table  # noqa: E402
 from .groups import Group  # noqa: E402
 from .load import BenchResults  # noqa: E402
-from .markdown import table  # noqa: E402
 
 
 def sweep_points(bench: BenchResults, parameter: str) -> pd.DataFrame:

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pandas as pd
 
+from ..markdown import number, table
 from ..scoring.attribution import ATTRIBUTION_CAUSES, IGNORED
 from .groups import COUNT_COLUMNS, Group
 from .load import BenchResults
-from .markdown import number, table
 from .paired import paired_difference
 
 

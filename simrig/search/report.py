@@ -10,8 +10,9 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from simrig.benchmark.results import write_table_atomic
+from simrig.benchmark.results import PARAMETER_PREFIX, write_table_atomic
 from simrig.dataset.outputs import save_figure, write_text_atomic
+from simrig.markdown import table
 
 from . import coverage
 from .evaluate import Estimate
@@ -19,7 +20,6 @@ from .fragments import Evaluation
 from .ranking import CONFIRM, fails
 from .space import SearchSpace
 
-PARAMETER_PREFIX = "param."
 PLOT = "objective.png"
 
 
@@ -99,32 +99,32 @@ def write_report(space: SearchSpace, evaluations: dict[str, list[Evaluation]], f
               f"![best objective so far]({PLOT})", ""]
     curves = {s: best_so_far(space, items) for s, items in streams.items()}
     marks = sorted({n for n in (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, config.budget) if n <= config.budget})
-    lines += ["| evaluations | " + " | ".join(curves) + " |", "|---:|" + "---:|" * len(curves)]
-    for n in marks:
-        lines.append(f"| {n} | " + " | ".join(_number(c[n - 1]) if n <= len(c) else "(stopped)"
-                                               for c in curves.values()) + " |")
+    lines += table(["evaluations", *curves], [[str(n), *(_shown(c[n - 1]) if n <= len(c) else "(stopped)"
+                                                         for c in curves.values())] for n in marks], first_left=False)
     if objective.failure is not None:
-        lines += ["", "| sampler | first failing evaluation | failing evaluations |", "|---|---:|---:|"]
-        lines += [f"| {s} | {first.get(s) or 'none'} | {sum(fails(space, e) for e in items)} of {len(items)} |"
-                  for s, items in streams.items()]
+        lines += ["", *table(["sampler", "first failing evaluation", "failing evaluations"],
+                             [[s, str(first.get(s) or "none"), f"{sum(fails(space, e) for e in items)} of {len(items)}"]
+                              for s, items in streams.items()])]
     names = _names(space)
     lines += ["", f"## The best candidates of {sampler}, re-evaluated on {config.confirm_seeds} fresh seeds", "",
               f"Ranked by their {objective.metric} during the search (on its seeds); the fresh seeds' values below "
-              "may order them differently.", "",
-              "| rank | " + " | ".join(f"`{n}`" for n in names) + f" | {objective.metric} (95% CI) |",
-              "|---:|" + "---|" * len(names) + "---|"]
+              "may order them differently.", ""]
+    rows = []
     for rank, e in enumerate(evaluations.get(CONFIRM, []), start=1):
         estimate = Estimate.of(e.values(objective.metric))
-        lines.append(f"| {rank} | " + " | ".join(_cell(e.candidate.get(n)) or "" for n in names)
-                     + f" | {_number(estimate.mean)} [{_number(estimate.low)}, {_number(estimate.high)}] |")
+        rows.append([str(rank), *(_cell(e.candidate.get(n)) or "" for n in names),
+                     f"{_shown(estimate.mean)} [{_shown(estimate.low)}, {_shown(estimate.high)}]"])
+    lines += table(["rank", *(f"`{n}`" for n in names), f"{objective.metric} (95% CI)"], rows,
+                   first_left=False, align=["---:", *["---"] * (len(names) + 1)])
     lines += ["", "## Coverage: evaluations per bin of each dimension", "",
               "A 0 is a part of the space this search never tried.", ""]
     for dimension in config.dimensions:
         for name in dimension.names:
             labels = [label for label, _ in coverage.bins(dimension, name)]
-            lines += [f"| `{name}` | " + " | ".join(labels) + " |", "|---|" + "---:|" * len(labels)]
-            lines += [f"| {stream} | " + " | ".join(str(n) for n in coverage.counts(
-                dimension, name, [e.candidate.get(name) for e in items])) + " |" for stream, items in streams.items()]
+            lines += table([f"`{name}`", *labels],
+                           [[stream, *(str(n) for n in coverage.counts(dimension, name,
+                                                                       [e.candidate.get(name) for e in items]))]
+                            for stream, items in streams.items()])
             lines.append("")
     lines += ["## The worst case, shrunk", ""]
     if worst is None:
@@ -143,5 +143,6 @@ def write_report(space: SearchSpace, evaluations: dict[str, list[Evaluation]], f
     write_text_atomic(path, "\n".join(lines) + "\n")
 
 
-def _number(value: float) -> str:
+def _shown(value: float) -> str:
+    """A metric in a table cell: 4 significant digits, a dash when undefined."""
     return "—" if value is None or math.isnan(value) else f"{value:.4g}"

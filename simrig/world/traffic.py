@@ -68,7 +68,7 @@ _ENV_CONFIG = {
 }
 
 
-def _number(value: float) -> int | float:
+def _integral_as_int(value: float) -> int | float:
     """An int where the value is integral (intersection-v0 uses the frequencies as loop counts)."""
     return int(value) if float(value).is_integer() else value
 
@@ -102,8 +102,8 @@ class TrafficWorld:
         env_config = {
             "observation": {"type": "AttributesObservation", "attributes": ["time"]},
             "duration": 1e9,
-            "policy_frequency": _number(frame_rate_hz),
-            "simulation_frequency": _number(frame_rate_hz * config.simulation_substeps),
+            "policy_frequency": _integral_as_int(frame_rate_hz),
+            "simulation_frequency": _integral_as_int(frame_rate_hz * config.simulation_substeps),
             **_ENV_CONFIG[config.env](config),
         }
         self.env = gym.make(config.env, config=env_config, render_mode=None, disable_env_checker=True)
