@@ -122,7 +122,7 @@ class RigConfig(Strict):
     """[px] image height; preset default when omitted (900 surround/ring, 375 stereo)."""
     mount_height_m: PositiveFloat = 1.6
     """[m] height of the optical centres above the road."""
-    cameras: tuple[CustomCamera, ...] = ()
+    cameras: Annotated[tuple[CustomCamera, ...], Field(max_length=32)] = ()
 
     @model_validator(mode="after")
     def _check(self) -> RigConfig:

@@ -148,7 +148,7 @@ class SearchSpaceConfig(Strict):
     """Names the default search folder (``runs/search/NAME``); :mod:`simrig.names`'s rule."""
     description: str = ""
     base: Annotated[str, Field(min_length=1)]
-    frames: Annotated[int, Field(ge=1)] | None = None
+    frames: Annotated[int, Field(ge=1, le=1_000_000)] | None = None
     """[-] frames of every evaluated scenario; the base scenario's own when omitted."""
     base_settings: dict[str, Any] = Field(default_factory=dict)
     """Settings of the base scenario by dotted path, changed once before the search."""
@@ -159,10 +159,10 @@ class SearchSpaceConfig(Strict):
     """[-] evaluations of the optimiser; random sampling, the baseline, gets the same number."""
     seeds: Annotated[int, Field(ge=1, le=1000)] = 1
     """[-] scenario seeds 0 … seeds − 1 run per evaluation."""
-    confirm_top: Annotated[int, Field(ge=0)] = 3
+    confirm_top: Annotated[int, Field(ge=0, le=1000)] = 3
     """[-] best candidates of the optimiser re-evaluated on ``confirm_seeds`` fresh seeds."""
     confirm_seeds: Annotated[int, Field(ge=1, le=1000)] = 5
-    dimensions: Annotated[tuple[Dimension, ...], Field(min_length=1)]
+    dimensions: Annotated[tuple[Dimension, ...], Field(min_length=1, max_length=100)]
 
     @model_validator(mode="after")
     def _check(self) -> SearchSpaceConfig:

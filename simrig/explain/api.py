@@ -29,9 +29,9 @@ import pyarrow.parquet as pq
 from simrig.dataset import Dataset
 from simrig.dataset.manifest import write_json_atomic
 from simrig.dataset.outputs import atomic_file, write_text_atomic
+from simrig.dataset.run_folder import DATASET_DIR, EXPLAIN_DIR, REPORT, SCORES_DIR, TRACKER_RECORD, TRACKS_DIR
 from simrig.errors import SimrigError
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
-from simrig.pipeline.run import DATASET_DIR, REPORT, SCORES_DIR, TRACKER_RECORD, TRACKS_DIR
 from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
 from simrig.reading import read_capped
@@ -45,7 +45,7 @@ from .coalition import CoalitionResult, CoalitionTask, TrackerRun, evaluate_coal
 from .shapley import Coalition, all_coalitions, coalition_order, exact_shares, prefixes, sample_orders, sampled_shares
 from .waterfall import waterfall
 
-EXPLAIN_DIR, CACHE_DIR = "explain", "cache"
+CACHE_DIR = "cache"
 EXACT_LIMIT = 7
 """Up to this many groups the Shapley values are exact (2^7 = 128 coalitions); above, sampled."""
 DEFAULT_SAMPLES = 12

@@ -64,7 +64,7 @@ def run_parts(folder: Path, tracker: str | None = None) -> tuple[Path, Path | No
     """(dataset folder, tracks folder or None, errors file or None) of a run folder or a dataset folder. A run
     folder (``simrig run``: ``dataset/``, ``tracks/LABEL/``, ``scores/LABEL/errors.parquet``) may hold several
     trackers' runs: ``tracker`` names the LABEL to show (needed only when there are several)."""
-    from simrig.pipeline.run import DATASET_DIR, SCORES_DIR, TRACKS_DIR
+    from simrig.dataset.run_folder import DATASET_DIR, SCORES_DIR, TRACKS_DIR
 
     folder = Path(folder)
     if (folder / "manifest.json").exists():

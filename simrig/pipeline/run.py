@@ -1,16 +1,6 @@
 """``run``: the whole bench on one scenario — generate, track, score, report — into one folder, resumable.
 
-Layout of ``out``::
-
-    dataset/                 the generated dataset, shared by every tracker run into this folder
-    tracks/LABEL/            the tracker's tracks (LABEL: the tracker's name, plus a key of its parameters and
-                             scored camera when it has any)
-    tracks/LABEL/tracker.json     how to build that tracker again: name, parameters, scored camera
-    scores/LABEL/score.json  every metric of that run: no wall-clock time, no absolute path, no timestamp
-    scores/LABEL/errors.parquet   every FN/IDS/FRAG with its causes
-    scores/LABEL/report.md   the score table and the command that reproduces it
-    scores/LABEL/timings.json     how long generation and the tracker's step() took (machine-dependent)
-    report.md                every tracker run in this folder, one section each (sorted by label)
+Layout of ``out``: :mod:`simrig.dataset.run_folder`.
 
 Resumable and reproducible: a complete dataset already in ``out/dataset`` that matches the resolved scenario,
 seed and frame count is reused (and said so), so a second tracker, or a rerun after a kill, does not generate
@@ -33,6 +23,7 @@ from pathlib import Path
 from simrig.dataset import Dataset
 from simrig.dataset.manifest import read_manifest, write_json_atomic
 from simrig.dataset.outputs import atomic_file, check_output_path, check_own_folder, write_text_atomic
+from simrig.dataset.run_folder import DATASET_DIR, REPORT, SCORES_DIR, TRACKER_RECORD, TRACKS_DIR
 from simrig.errors import DatasetError, DatasetExistsError
 from simrig.names import path_part
 from simrig.pipeline.generate import generate
@@ -40,9 +31,6 @@ from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
 from simrig.pipeline.track import TrackingRun, build_tracker, run_tracker
 from simrig.scenarios import Scenario, load_scenario
 from simrig.scoring import ScoreReport, score
-
-DATASET_DIR, TRACKS_DIR, SCORES_DIR, REPORT = "dataset", "tracks", "scores", "report.md"
-TRACKER_RECORD = "tracker.json"
 
 
 @dataclass(frozen=True)
