@@ -10,14 +10,13 @@ import argparse
 import contextlib
 import math
 import os
-import signal
 import sys
-import threading
 from pathlib import Path
 
 from simrig.scenarios import DEFAULT_SCENARIO, ScenarioError, catalog, load_scenario
 
 from .errors import SimrigError
+from .interrupts import interrupted, noting_interrupts
 
 MAX_FRAMES = 1_000_000
 """The most frames a scenario may ask for (``scenarios.schema.Scenario.frames``)."""
@@ -649,36 +648,14 @@ def _tracker_arguments(parser: argparse.ArgumentParser) -> None:
                         help="stop the tracker when one step() runs longer than this (default 60; 0: no limit)")
 
 
-@contextlib.contextmanager
-def _noting_interrupts():
-    """Note whether Ctrl-C arrived (SIGINT, in the main thread, when Python's default handler is in place):
-    the KeyboardInterrupt it raises can surface as another exception — inside a library's lazy import, say, as an
-    AttributeError — which must still end as an interruption, not as a traceback."""
-    seen = {"interrupted": False}
-    previous = signal.getsignal(signal.SIGINT)
-    install = previous is signal.default_int_handler and threading.current_thread() is threading.main_thread()
-
-    def interrupted(signum, frame):
-        seen["interrupted"] = True
-        raise KeyboardInterrupt
-
-    if install:
-        signal.signal(signal.SIGINT, interrupted)
-    try:
-        yield seen
-    finally:
-        if install:
-            signal.signal(signal.SIGINT, previous)
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    with _noting_interrupts() as seen:
+    with noting_interrupts():  # a KeyboardInterrupt can surface as another error (inside a lazy import, say)
         try:
             return args.run(args)
         except (KeyboardInterrupt, Exception) as error:
-            if isinstance(error, KeyboardInterrupt) or seen["interrupted"]:
+            if isinstance(error, KeyboardInterrupt) or interrupted():
                 print("simrig: interrupted (a generation in progress leaves no dataset behind)", file=sys.stderr)
                 return 130
             if isinstance(error, (SimrigError, ScenarioError)):

@@ -375,3 +375,21 @@ def test_a_nuscenes_box_with_a_zero_quaternion_is_refused(small_dataset, saga_tr
     boxes[0]["rotation"] = [0.0, 0.0, 0.0, 0.0]
     results.write_text(json.dumps(document))
     _main_refuses(["score", small_dataset.path, results], capsys, "is not a unit quaternion")
+
+
+# ---------------------------------------------------------------- Ctrl-C that a library swallows
+def test_a_swallowed_ctrl_c_still_stops_the_next_frame():
+    import signal
+
+    from simrig.interrupts import noting_interrupts, stop_if_interrupted
+
+    with noting_interrupts():
+        try:  # a library's bare except around an optional import, say
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(1000):  # the handler runs at the next bytecode boundary
+                pass
+        except BaseException:  # noqa: BLE001 - what the library does
+            pass
+        with pytest.raises(KeyboardInterrupt):
+            stop_if_interrupted()
+    stop_if_interrupted()  # outside the block: nothing noted, nothing raised

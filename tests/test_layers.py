@@ -16,7 +16,8 @@ FOLDERS = {"simrig": ROOT / "simrig", "simrig.trackers": ROOT / "tracker", "simr
 # Bottom to top. A module belongs to the first layer one of whose prefixes it starts with.
 LAYERS: dict[str, tuple[str, ...]] = {
     "records": ("simrig.types", "simrig.errors", "simrig.seeding", "simrig.classes", "simrig.causes",
-                "simrig.road", "simrig.version", "simrig.lifeline", "simrig.names", "simrig.reading", "simrig.markdown"),
+                "simrig.road", "simrig.version", "simrig.lifeline", "simrig.names", "simrig.reading", "simrig.markdown",
+                "simrig.interrupts"),
     "scenarios": ("simrig.scenarios",),
     "geometry": ("simrig.geometry", "simrig.rig"),
     "trackers": ("simrig.trackers",),

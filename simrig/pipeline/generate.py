@@ -17,6 +17,7 @@ from simrig.dataset.manifest import IMAGES_FOLDER, package_versions
 from simrig.dataset.tables import frame_columns
 from simrig.errors import DatasetError
 from simrig.geometry import Projection, project_boxes
+from simrig.interrupts import stop_if_interrupted
 from simrig.pipeline.content_keys import world_key
 from simrig.pipeline.recorded_world import RecordedWorld
 from simrig.render.visibility import Visibility
@@ -102,6 +103,7 @@ def generate(
         with DatasetWriter(out, overwrite=overwrite) as writer:
             writer.write_json("rig.json", rig_to_dict(rig))
             for frame in tqdm(range(frames), desc=scenario.name, unit="frame", disable=not progress):
+                stop_if_interrupted()
                 state, projection, visibility = world.frame(frame, times)
                 events.extend({"frame": state.frame, "event": name} for name in state.events)
                 if frame == 0 and world.markings is not None:

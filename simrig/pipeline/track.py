@@ -24,6 +24,7 @@ from simrig.dataset.tracks_file import (
     write_tracks,
 )
 from simrig.errors import SimrigError
+from simrig.interrupts import stop_if_interrupted
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S, TrackerFault, checked_tracks, time_limit
 from simrig.pipeline.trust import TrackerReferenceError, import_tracker_factory
 from simrig.trackers.errors import TrackerInputError
@@ -118,6 +119,7 @@ def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = No
     kept: list[tuple[int, list[Track]]] = []  # a semi-online tracker's answers, until finish() revises them
     frames, rows, elapsed = 0, 0, 0.0
     for frame in dataset.sensor_frames():
+        stop_if_interrupted()
         start = time.perf_counter()
         try:
             with _guarded(label, f"frame {frame.frame}: step()", frame_time_limit_s):
