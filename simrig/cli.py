@@ -58,6 +58,17 @@ def _output(path: Path | None, what: str, *, inputs=(), folder: bool = True) -> 
     return check_output_path(path, what=what, inputs=inputs, folder=folder)
 
 
+def _register_generate(commands) -> None:
+    """``simrig generate``'s options."""
+    gen = commands.add_parser("generate", help="generate a dataset from a scenario")
+    _scenario_arguments(gen)
+    gen.add_argument("--out", type=Path, required=True, help="output dataset folder")
+    gen.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in --out")
+    gen.add_argument("--images", action="store_true", help="also write a PNG per camera and frame (slow)")
+    gen.add_argument("--quiet", action="store_true", help="no progress bar")
+    gen.set_defaults(run=_cmd_generate)
+
+
 def _cmd_generate(args: argparse.Namespace) -> int:
     from simrig.pipeline.generate import generate
 
@@ -114,6 +125,12 @@ def _warn_ineffective(scenario, dataset_path: Path) -> None:
         print(f"warning: {message}", file=sys.stderr)
 
 
+def _register_scenarios(commands) -> None:
+    """``simrig scenarios``'s options."""
+    scen = commands.add_parser("scenarios", help="list the scenario catalog")
+    scen.set_defaults(run=_cmd_scenarios)
+
+
 def _cmd_scenarios(args: argparse.Namespace) -> int:
     entries = catalog()
     width = max(len(name) for name in entries)
@@ -123,6 +140,14 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
         print(f"{marker} {name:<{width}}  {scenario.description}")
     print(f"(* default; {len(entries)} scenarios in {Path(next(iter(entries.values()))).parent})")
     return 0
+
+
+def _register_info(commands) -> None:
+    """``simrig info``'s options."""
+    info = commands.add_parser("info", help="summarise a dataset folder")
+    info.add_argument("dataset", type=Path)
+    info.add_argument("--verify", action="store_true", help="also check every file's SHA-256")
+    info.set_defaults(run=_cmd_info)
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
@@ -137,6 +162,17 @@ def _cmd_info(args: argparse.Namespace) -> int:
             shown = ", ".join(extra[:10]) + (f" and {len(extra) - 10} more" if len(extra) > 10 else "")
             print(f"extra     {len(extra)} file(s) not in the manifest (not part of the dataset): {shown}")
     return 0
+
+
+def _register_render(commands) -> None:
+    """``simrig render``'s options."""
+    render = commands.add_parser("render", help="a mosaic PNG of every camera and a bird's-eye view of one frame")
+    render.add_argument("dataset", type=Path)
+    render.add_argument("--frame", type=_int_at_least(0), required=True, help="frame index")
+    render.add_argument("--out", type=Path, default=None, help="PNG path (default: DIR/mosaic_FRAME.png)")
+    render.add_argument("--tracks", type=Path, default=None,
+                        help="also draw a tracker's boxes (a tracks folder or file, any format 'score' reads)")
+    render.set_defaults(run=_cmd_render)
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
@@ -154,12 +190,35 @@ def _cmd_render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _register_view(commands) -> None:
+    """``simrig view``'s options."""
+    view = commands.add_parser("view", help="look at a run frame by frame in rerun (the 'view' extra)")
+    view.add_argument("run_dir", type=Path, help="a folder 'simrig run' wrote (or a dataset folder)")
+    view.add_argument("--save", type=Path, default=None, metavar="FILE.rrd",
+                      help="write a rerun recording here instead of opening the viewer")
+    view.add_argument("--tracker", default=None, metavar="LABEL",
+                      help="which run of RUN_DIR/tracks/ to show when it holds several")
+    view.set_defaults(run=_cmd_view)
+
+
 def _cmd_view(args: argparse.Namespace) -> int:
     from simrig.figures.viewer import log_run
 
     saved = log_run(args.run_dir, tracker=args.tracker, save=args.save, save_option="--save")
     print(f"wrote     {saved}" if saved is not None else "logged to a rerun viewer")
     return 0
+
+
+def _register_replay(commands) -> None:
+    """``simrig replay``'s options."""
+    replay = commands.add_parser("replay", help="rerun a replay file (a failing test's scenario) and compare")
+    replay.add_argument("file", type=Path)
+    replay.add_argument("--tracker", default=None, help="registered name or module:attribute (default: the file's)")
+    replay.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                        help="a tracker parameter, repeatable (default: the file's)")
+    replay.add_argument("--out", type=Path, default=None, help="keep the dataset and tracks here (default: temporary)")
+    _trust_argument(replay, "the replay file")
+    replay.set_defaults(run=_cmd_replay)
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
@@ -174,6 +233,19 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     return 0 if result.reproduced else 1
 
 
+def _register_export(commands) -> None:
+    """``simrig export``'s options."""
+    exporter = commands.add_parser("export", help="write a dataset (and a tracker's output) for other tools")
+    exporter.add_argument("dataset", type=Path)
+    exporter.add_argument("--format", required=True, choices=("motchallenge", "kitti", "nuscenes"))
+    exporter.add_argument("--tracks", type=Path, default=None, help="a tracks folder or file to export too")
+    exporter.add_argument("--out", type=Path, required=True, help="folder to write (must not exist)")
+    exporter.add_argument("--overwrite", action="store_true", help="replace OUT if it exists")
+    exporter.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                          help="an [evaluation] key, as for score: the ignored ground truth is written as distractors")
+    exporter.set_defaults(run=_cmd_export)
+
+
 def _cmd_export(args: argparse.Namespace) -> int:
     from .dataset.evaluation import evaluation_overrides
     from .export import export
@@ -184,6 +256,17 @@ def _cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _register_import(commands) -> None:
+    """``simrig import``'s options."""
+    importer = commands.add_parser("import", help="make a dataset of ground truth from MOTChallenge, KITTI or nuScenes")
+    importer.add_argument("src", type=Path, help="MOTChallenge: a sequence, benchmark or TrackEval folder; KITTI: a "
+                          "label_02 folder (or an export's); nuScenes: the folder of the version's tables")
+    importer.add_argument("--format", required=True, choices=("motchallenge", "kitti", "nuscenes"))
+    importer.add_argument("--out", type=Path, required=True, help="dataset folder to write")
+    importer.add_argument("--overwrite", action="store_true", help="replace a dataset already in --out")
+    importer.set_defaults(run=_cmd_import)
+
+
 def _cmd_import(args: argparse.Namespace) -> int:
     from .dataset import Dataset
     from .dataset.importing import import_dataset
@@ -191,6 +274,28 @@ def _cmd_import(args: argparse.Namespace) -> int:
     import_dataset(args.format, args.src, args.out, overwrite=args.overwrite)
     print(Dataset.open(args.out).summary())
     return 0
+
+
+def _register_score(commands) -> None:
+    """``simrig score``'s options."""
+    scorer = commands.add_parser("score", help="score a tracker's output (tracks folder or file) on a dataset")
+    scorer.add_argument("dataset", type=Path)
+    scorer.add_argument("tracks", type=Path, help="folder with tracks3d.parquet / tracks2d.parquet, or one file; "
+                        "or MOTChallenge, KITTI or nuScenes files (see --format)")
+    scorer.add_argument("--format", default=None, choices=("simrig", "motchallenge", "kitti", "nuscenes"),
+                        help="the tracks' format (default: detected; MOTChallenge/KITTI: CAMERA.txt files or an "
+                             "export folder; nuScenes: a results .json)")
+    scorer.add_argument("--json", type=Path, default=None, help="also write every metric as JSON here")
+    scorer.add_argument("--errors", type=Path, default=None,
+                        help="also write every FN / IDS / FRAG with its causes as Parquet here")
+    scorer.add_argument("--lookback", type=_non_negative_float, default=1.0,
+                        help="[s] an ID switch is also tagged with the causes this long before it (default 1)")
+    scorer.add_argument("--camera", default=None, metavar="NAME",
+                        help="score only this camera, in 2D (e.g. a stereo pair's ego camera 'left')")
+    scorer.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                        help="an [evaluation] key on top of the dataset's (e.g. min_height_px=40, range_m.car=60, "
+                             "ignore=false, classes=any); repeatable")
+    scorer.set_defaults(run=_cmd_score)
 
 
 def _cmd_score(args: argparse.Namespace) -> int:
@@ -242,6 +347,17 @@ def _params(pairs: list[tuple[str, object]] | None) -> dict[str, object]:
     return params
 
 
+def _register_track(commands) -> None:
+    """``simrig track``'s options."""
+    track = commands.add_parser("track", help="run a registered tracker over a dataset and write its tracks")
+    track.add_argument("dataset", type=Path)
+    _tracker_arguments(track)
+    track.add_argument("--out", type=Path, required=True, help="tracks folder to write")
+    track.add_argument("--images", action="store_true",
+                       help="the tracker needs images: fail unless the dataset has them (SensorFrame.images)")
+    track.set_defaults(run=_cmd_track)
+
+
 def _cmd_track(args: argparse.Namespace) -> int:
     from simrig.pipeline.track import run_tracker
 
@@ -261,6 +377,12 @@ def _cmd_track(args: argparse.Namespace) -> int:
     return 0
 
 
+def _register_trackers(commands) -> None:
+    """``simrig trackers``'s options."""
+    trackers = commands.add_parser("trackers", help="list the registered trackers and their parameters")
+    trackers.set_defaults(run=_cmd_trackers)
+
+
 def _cmd_trackers(args: argparse.Namespace) -> int:
     import inspect
 
@@ -273,6 +395,27 @@ def _cmd_trackers(args: argparse.Namespace) -> int:
         )
         print(f"{name}: {settings}")
     return 0
+
+
+def _register_run(commands) -> None:
+    """``simrig run``'s options."""
+    run = commands.add_parser("run", help="generate a scenario, track it, score it and write a report")
+    _scenario_arguments(run)
+    _tracker_arguments(run)
+    run.add_argument("--out", type=Path, default=None,
+                     help="output folder (default: runs/SCENARIO-seedSEED); holds dataset/, tracks/, report.md")
+    run.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in OUT/dataset")
+    run.add_argument("--camera", default=None, metavar="NAME", help="score only this camera, in 2D")
+    run.add_argument("--images", action="store_true",
+                     help="also render a PNG per camera and frame (slow); the tracker gets their paths in "
+                          "SensorFrame.images")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--explain", action="store_true",
+                     help="also split the gap to a perfect sensor among the causes (simrig explain) and add it "
+                          "to report.md")
+    run.add_argument("--workers", type=_int_at_least(1), default=None,
+                     help="processes for --explain's counterfactual runs (default: this machine's)")
+    run.set_defaults(run=_cmd_run)
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -329,6 +472,27 @@ def _names(text: str) -> list[str]:
     return names
 
 
+def _register_explain(commands) -> None:
+    """``simrig explain``'s options."""
+    explainer = commands.add_parser(
+        "explain", help="what each cause of detector error cost a run's tracker (counterfactual reruns, Shapley)")
+    explainer.add_argument("run_dir", type=Path, help="a 'simrig run' folder (dataset/, tracks/, scores/)")
+    explainer.add_argument("--label", default=None, help="which tracker run of RUN_DIR/tracks/ (when it holds several)")
+    explainer.add_argument("--metric", type=_names, default=None, metavar="A,B,...",
+                           help="overall metrics to explain (default AMOTA,HOTA,IDS,FN,FRAG for a 3D tracker; "
+                                "2d:NAME or 3d:NAME picks a dimension)")
+    explainer.add_argument("--causes", type=_names, default=None, metavar="A,B,...",
+                           help="cause groups to share among (default: every group present in the scenario)")
+    explainer.add_argument("--samples", type=_int_at_least(2, EXPLAIN_MAX_SAMPLES), default=None, metavar="N",
+                           help="sample N permutations (default: exact when there are at most 7 groups, else 12)")
+    explainer.add_argument("--engine", choices=("local", "ray"), default="local", help="where the runs go")
+    explainer.add_argument("--workers", type=_int_at_least(1), default=None,
+                           help="processes (local; 1 runs in this process) or CPUs of a local Ray instance")
+    explainer.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
+    _trust_argument(explainer, "the run folder's tracker.json")
+    explainer.set_defaults(run=_cmd_explain)
+
+
 def _cmd_explain(args: argparse.Namespace) -> int:
     from .explain import explain
 
@@ -367,6 +531,33 @@ def _check_explain_options(args: argparse.Namespace) -> None:
         check_explain_seeds(args.explain_seeds, suite.seeds, f"suite {suite.name!r}")
 
 
+def _register_bench(commands) -> None:
+    """``simrig bench``'s options."""
+    from simrig.benchmark.engine_names import ENGINES
+    from simrig.scenarios import suite_catalog
+
+    bench = commands.add_parser("bench", help="run a suite: scenarios x trackers x seeds x sweeps, resumable")
+    bench.add_argument("suite", help=f"named suite ({', '.join(suite_catalog())}) or a suite .toml file")
+    bench.add_argument("--engine", choices=ENGINES, default="local",
+                       help="local: a process pool (default); ray: Ray tasks (the 'ray' extra)")
+    bench.add_argument("--workers", type=_int_at_least(1), default=None,
+                       help="processes (local) or CPUs of the local Ray instance (default: this machine's)")
+    bench.add_argument("--out", type=Path, default=None, help="bench folder (default: runs/bench/SUITE)")
+    bench.add_argument("--cache", type=Path, default=None,
+                       help="datasets by content key, shareable between suites (default: OUT/datasets)")
+    bench.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
+    bench.add_argument("--quiet", action="store_true", help="no progress bar")
+    bench.add_argument("--explain", action="store_true",
+                       help="then explain every tracker on every base cell (simrig explain; the report's 'What each "
+                            "cause costs' section)")
+    bench.add_argument("--explain-samples", type=_int_at_least(2, EXPLAIN_MAX_SAMPLES), default=None, metavar="N",
+                       help="permutations --explain samples (default: exact up to 7 cause groups, else 12)")
+    bench.add_argument("--explain-seeds", type=_seed_list, default=None, metavar="A,B,...",
+                       help="explain only the base cells of these seeds (default: every seed of the suite)")
+    _trust_argument(bench, "the suite file")
+    bench.set_defaults(run=_cmd_bench)
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from .benchmark import run_bench
     from .benchmark.api import BenchInterrupted
@@ -400,12 +591,48 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _register_report(commands) -> None:
+    """``simrig report``'s options."""
+    report = commands.add_parser("report", help="write reports/SUITE/index.md with plots from a bench folder")
+    report.add_argument("results", type=Path, help="a bench folder (or its results.parquet)")
+    report.add_argument("--out", type=Path, default=None, help="report folder (default: reports/SUITE)")
+    report.set_defaults(run=_cmd_report)
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from .report import write_report
 
     _output(args.out, "--out")
     print(write_report(args.results, out=args.out))
     return 0
+
+
+def _register_search(commands) -> None:
+    """``simrig search``'s options."""
+    from simrig.benchmark.engine_names import ENGINES
+
+    search = commands.add_parser("search", help="look for a tracker's worst case, shrink it, write a regression test")
+    search.add_argument("space", help="catalog search space (e.g. occlusion_gaps) or a search space .toml file")
+    search.add_argument("--tracker", default=None, help="registered name or module:attribute (default: the file's)")
+    search.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
+                        help="a tracker parameter, repeatable (default: the file's)")
+    search.add_argument("--budget", type=_int_at_least(1), default=None, help="evaluations per sampler")
+    search.add_argument("--sampler", choices=("tpe", "cmaes", "random"), default="tpe",
+                        help="the optimiser (default tpe); random sampling also runs as the baseline")
+    search.add_argument("--seed", type=_int_at_least(0), default=0, help="search seed (default 0)")
+    search.add_argument("--engine", choices=ENGINES, default="local",
+                        help="where an evaluation's seeds run: local processes (default) or Ray tasks")
+    search.add_argument("--workers", type=_int_at_least(1), default=1,
+                        help="processes (local) or CPUs of the local Ray instance for an evaluation's seeds")
+    search.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
+    search.add_argument("--out", type=Path, default=None, help="search folder (default: runs/search/SPACE)")
+    search.add_argument("--cache", type=Path, default=None, help="datasets by content key (default: OUT/datasets)")
+    search.add_argument("--trust-file", action="store_true",
+                        help="let the space file import its module:attribute tracker (data files may otherwise only "
+                        "name registered trackers)")
+    search.add_argument("--stop-at-failure", action="store_true", help="end each sampler at its first failing case")
+    search.add_argument("--quiet", action="store_true", help="no progress bar")
+    search.set_defaults(run=_cmd_search)
 
 
 def _cmd_search(args: argparse.Namespace) -> int:
@@ -443,186 +670,18 @@ def build_parser() -> argparse.ArgumentParser:
         prog="simrig", description="A test bench for multi-camera multi-object trackers on moving vehicles."
     )
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-
-    gen = commands.add_parser("generate", help="generate a dataset from a scenario")
-    _scenario_arguments(gen)
-    gen.add_argument("--out", type=Path, required=True, help="output dataset folder")
-    gen.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in --out")
-    gen.add_argument("--images", action="store_true", help="also write a PNG per camera and frame (slow)")
-    gen.add_argument("--quiet", action="store_true", help="no progress bar")
-    gen.set_defaults(run=_cmd_generate)
-
-    scen = commands.add_parser("scenarios", help="list the scenario catalog")
-    scen.set_defaults(run=_cmd_scenarios)
-
-    info = commands.add_parser("info", help="summarise a dataset folder")
-    info.add_argument("dataset", type=Path)
-    info.add_argument("--verify", action="store_true", help="also check every file's SHA-256")
-    info.set_defaults(run=_cmd_info)
-    render = commands.add_parser("render", help="a mosaic PNG of every camera and a bird's-eye view of one frame")
-    render.add_argument("dataset", type=Path)
-    render.add_argument("--frame", type=_int_at_least(0), required=True, help="frame index")
-    render.add_argument("--out", type=Path, default=None, help="PNG path (default: DIR/mosaic_FRAME.png)")
-    render.add_argument("--tracks", type=Path, default=None,
-                        help="also draw a tracker's boxes (a tracks folder or file, any format 'score' reads)")
-    render.set_defaults(run=_cmd_render)
-
-    view = commands.add_parser("view", help="look at a run frame by frame in rerun (the 'view' extra)")
-    view.add_argument("run_dir", type=Path, help="a folder 'simrig run' wrote (or a dataset folder)")
-    view.add_argument("--save", type=Path, default=None, metavar="FILE.rrd",
-                      help="write a rerun recording here instead of opening the viewer")
-    view.add_argument("--tracker", default=None, metavar="LABEL",
-                      help="which run of RUN_DIR/tracks/ to show when it holds several")
-    view.set_defaults(run=_cmd_view)
-
-    scorer = commands.add_parser("score", help="score a tracker's output (tracks folder or file) on a dataset")
-    scorer.add_argument("dataset", type=Path)
-    scorer.add_argument("tracks", type=Path, help="folder with tracks3d.parquet / tracks2d.parquet, or one file; "
-                        "or MOTChallenge, KITTI or nuScenes files (see --format)")
-    scorer.add_argument("--format", default=None, choices=("simrig", "motchallenge", "kitti", "nuscenes"),
-                        help="the tracks' format (default: detected; MOTChallenge/KITTI: CAMERA.txt files or an "
-                             "export folder; nuScenes: a results .json)")
-    scorer.add_argument("--json", type=Path, default=None, help="also write every metric as JSON here")
-    scorer.add_argument("--errors", type=Path, default=None,
-                        help="also write every FN / IDS / FRAG with its causes as Parquet here")
-    scorer.add_argument("--lookback", type=_non_negative_float, default=1.0,
-                        help="[s] an ID switch is also tagged with the causes this long before it (default 1)")
-    scorer.add_argument("--camera", default=None, metavar="NAME",
-                        help="score only this camera, in 2D (e.g. a stereo pair's ego camera 'left')")
-    scorer.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
-                        help="an [evaluation] key on top of the dataset's (e.g. min_height_px=40, range_m.car=60, "
-                             "ignore=false, classes=any); repeatable")
-    scorer.set_defaults(run=_cmd_score)
-
-    replay = commands.add_parser("replay", help="rerun a replay file (a failing test's scenario) and compare")
-    replay.add_argument("file", type=Path)
-    replay.add_argument("--tracker", default=None, help="registered name or module:attribute (default: the file's)")
-    replay.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
-                        help="a tracker parameter, repeatable (default: the file's)")
-    replay.add_argument("--out", type=Path, default=None, help="keep the dataset and tracks here (default: temporary)")
-    _trust_argument(replay, "the replay file")
-    replay.set_defaults(run=_cmd_replay)
-
-    exporter = commands.add_parser("export", help="write a dataset (and a tracker's output) for other tools")
-    exporter.add_argument("dataset", type=Path)
-    exporter.add_argument("--format", required=True, choices=("motchallenge", "kitti", "nuscenes"))
-    exporter.add_argument("--tracks", type=Path, default=None, help="a tracks folder or file to export too")
-    exporter.add_argument("--out", type=Path, required=True, help="folder to write (must not exist)")
-    exporter.add_argument("--overwrite", action="store_true", help="replace OUT if it exists")
-    exporter.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
-                          help="an [evaluation] key, as for score: the ignored ground truth is written as distractors")
-    exporter.set_defaults(run=_cmd_export)
-
-    importer = commands.add_parser("import", help="make a dataset of ground truth from MOTChallenge, KITTI or nuScenes")
-    importer.add_argument("src", type=Path, help="MOTChallenge: a sequence, benchmark or TrackEval folder; KITTI: a "
-                          "label_02 folder (or an export's); nuScenes: the folder of the version's tables")
-    importer.add_argument("--format", required=True, choices=("motchallenge", "kitti", "nuscenes"))
-    importer.add_argument("--out", type=Path, required=True, help="dataset folder to write")
-    importer.add_argument("--overwrite", action="store_true", help="replace a dataset already in --out")
-    importer.set_defaults(run=_cmd_import)
-
-    track = commands.add_parser("track", help="run a registered tracker over a dataset and write its tracks")
-    track.add_argument("dataset", type=Path)
-    _tracker_arguments(track)
-    track.add_argument("--out", type=Path, required=True, help="tracks folder to write")
-    track.add_argument("--images", action="store_true",
-                       help="the tracker needs images: fail unless the dataset has them (SensorFrame.images)")
-    track.set_defaults(run=_cmd_track)
-
-    trackers = commands.add_parser("trackers", help="list the registered trackers and their parameters")
-    trackers.set_defaults(run=_cmd_trackers)
-
-    from simrig.benchmark.engine_names import ENGINES
-    from simrig.scenarios import suite_catalog
-
-    bench = commands.add_parser("bench", help="run a suite: scenarios x trackers x seeds x sweeps, resumable")
-    bench.add_argument("suite", help=f"named suite ({', '.join(suite_catalog())}) or a suite .toml file")
-    bench.add_argument("--engine", choices=ENGINES, default="local",
-                       help="local: a process pool (default); ray: Ray tasks (the 'ray' extra)")
-    bench.add_argument("--workers", type=_int_at_least(1), default=None,
-                       help="processes (local) or CPUs of the local Ray instance (default: this machine's)")
-    bench.add_argument("--out", type=Path, default=None, help="bench folder (default: runs/bench/SUITE)")
-    bench.add_argument("--cache", type=Path, default=None,
-                       help="datasets by content key, shareable between suites (default: OUT/datasets)")
-    bench.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
-    bench.add_argument("--quiet", action="store_true", help="no progress bar")
-    bench.add_argument("--explain", action="store_true",
-                       help="then explain every tracker on every base cell (simrig explain; the report's 'What each "
-                            "cause costs' section)")
-    bench.add_argument("--explain-samples", type=_int_at_least(2, EXPLAIN_MAX_SAMPLES), default=None, metavar="N",
-                       help="permutations --explain samples (default: exact up to 7 cause groups, else 12)")
-    bench.add_argument("--explain-seeds", type=_seed_list, default=None, metavar="A,B,...",
-                       help="explain only the base cells of these seeds (default: every seed of the suite)")
-    _trust_argument(bench, "the suite file")
-    bench.set_defaults(run=_cmd_bench)
-
-    search = commands.add_parser("search", help="look for a tracker's worst case, shrink it, write a regression test")
-    search.add_argument("space", help="catalog search space (e.g. occlusion_gaps) or a search space .toml file")
-    search.add_argument("--tracker", default=None, help="registered name or module:attribute (default: the file's)")
-    search.add_argument("--param", type=_tracker_param, action="append", metavar="KEY=VALUE",
-                        help="a tracker parameter, repeatable (default: the file's)")
-    search.add_argument("--budget", type=_int_at_least(1), default=None, help="evaluations per sampler")
-    search.add_argument("--sampler", choices=("tpe", "cmaes", "random"), default="tpe",
-                        help="the optimiser (default tpe); random sampling also runs as the baseline")
-    search.add_argument("--seed", type=_int_at_least(0), default=0, help="search seed (default 0)")
-    search.add_argument("--engine", choices=ENGINES, default="local",
-                        help="where an evaluation's seeds run: local processes (default) or Ray tasks")
-    search.add_argument("--workers", type=_int_at_least(1), default=1,
-                        help="processes (local) or CPUs of the local Ray instance for an evaluation's seeds")
-    search.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
-    search.add_argument("--out", type=Path, default=None, help="search folder (default: runs/search/SPACE)")
-    search.add_argument("--cache", type=Path, default=None, help="datasets by content key (default: OUT/datasets)")
-    search.add_argument("--trust-file", action="store_true",
-                        help="let the space file import its module:attribute tracker (data files may otherwise only "
-                        "name registered trackers)")
-    search.add_argument("--stop-at-failure", action="store_true", help="end each sampler at its first failing case")
-    search.add_argument("--quiet", action="store_true", help="no progress bar")
-    search.set_defaults(run=_cmd_search)
-
-    report = commands.add_parser("report", help="write reports/SUITE/index.md with plots from a bench folder")
-    report.add_argument("results", type=Path, help="a bench folder (or its results.parquet)")
-    report.add_argument("--out", type=Path, default=None, help="report folder (default: reports/SUITE)")
-    report.set_defaults(run=_cmd_report)
-
-    run = commands.add_parser("run", help="generate a scenario, track it, score it and write a report")
-    _scenario_arguments(run)
-    _tracker_arguments(run)
-    run.add_argument("--out", type=Path, default=None,
-                     help="output folder (default: runs/SCENARIO-seedSEED); holds dataset/, tracks/, report.md")
-    run.add_argument("--overwrite", action="store_true", help="replace a complete dataset already in OUT/dataset")
-    run.add_argument("--camera", default=None, metavar="NAME", help="score only this camera, in 2D")
-    run.add_argument("--images", action="store_true",
-                     help="also render a PNG per camera and frame (slow); the tracker gets their paths in "
-                          "SensorFrame.images")
-    run.add_argument("--quiet", action="store_true", help="no progress bar")
-    run.add_argument("--explain", action="store_true",
-                     help="also split the gap to a perfect sensor among the causes (simrig explain) and add it "
-                          "to report.md")
-    run.add_argument("--workers", type=_int_at_least(1), default=None,
-                     help="processes for --explain's counterfactual runs (default: this machine's)")
-    run.set_defaults(run=_cmd_run)
-
-    explainer = commands.add_parser(
-        "explain", help="what each cause of detector error cost a run's tracker (counterfactual reruns, Shapley)")
-    explainer.add_argument("run_dir", type=Path, help="a 'simrig run' folder (dataset/, tracks/, scores/)")
-    explainer.add_argument("--label", default=None, help="which tracker run of RUN_DIR/tracks/ (when it holds several)")
-    explainer.add_argument("--metric", type=_names, default=None, metavar="A,B,...",
-                           help="overall metrics to explain (default AMOTA,HOTA,IDS,FN,FRAG for a 3D tracker; "
-                                "2d:NAME or 3d:NAME picks a dimension)")
-    explainer.add_argument("--causes", type=_names, default=None, metavar="A,B,...",
-                           help="cause groups to share among (default: every group present in the scenario)")
-    explainer.add_argument("--samples", type=_int_at_least(2, EXPLAIN_MAX_SAMPLES), default=None, metavar="N",
-                           help="sample N permutations (default: exact when there are at most 7 groups, else 12)")
-    explainer.add_argument("--engine", choices=("local", "ray"), default="local", help="where the runs go")
-    explainer.add_argument("--workers", type=_int_at_least(1), default=None,
-                           help="processes (local; 1 runs in this process) or CPUs of a local Ray instance")
-    explainer.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
-    _trust_argument(explainer, "the run folder's tracker.json")
-    explainer.set_defaults(run=_cmd_explain)
     from .detector.cli import add_detector_command
 
-    add_detector_command(commands)
+    for register in COMMANDS + (add_detector_command,):  # each command's options sit next to its handler
+        register(commands)
     return parser
+
+
+COMMANDS = (_register_generate, _register_scenarios, _register_info, _register_render, _register_view,
+            _register_score, _register_replay, _register_export, _register_import, _register_track,
+            _register_trackers, _register_bench, _register_search, _register_report, _register_run,
+            _register_explain)
+"""The commands in the order ``simrig --help`` lists them (``detector`` last, from :mod:`simrig.detector.cli`)."""
 
 
 def _trust_argument(parser: argparse.ArgumentParser, what: str) -> None:
