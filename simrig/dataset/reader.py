@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import json
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -15,7 +14,6 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from ..errors import DatasetError
-from ..reading import read_capped
 from ..rig import rig_from_dict
 from ..road import RoadMarkings
 from ..types import (
@@ -31,7 +29,8 @@ from ..types import (
 )
 from .arrow_columns import string_codes
 from .ground_truth import GroundTruth, load_depth
-from .manifest import MANIFEST_NAME, file_sha256, folder_digest, read_manifest
+from .manifest import MANIFEST_NAME, read_manifest
+from .manifest_files import ManifestFiles
 from .tables import SCHEMAS
 
 
@@ -124,73 +123,12 @@ class Dataset:
         """Check that every file listed in the manifest exists and has the recorded SHA-256 (the manifest's own
         hash is checked on :meth:`open`); returns the files in the folder that the manifest does not list
         (e.g. a mosaic written by ``simrig render``), sorted, relative to the folder."""
-        for name in self.manifest["files"]:
-            self._check_file(name)
-        images = self.manifest.get("images")
-        if images is not None and folder_digest(self.path / images["folder"]) != images:
-            raise DatasetError(f"{self.path}: the images under {images['folder']!r} do not match the manifest")
-        listed = {entry["file"] for entry in self.manifest["files"].values()} | {MANIFEST_NAME}
-        image_folder = self.path / images["folder"] if images is not None else None
-        extra = []
-        for path in self.path.rglob("*"):
-            if path.is_dir() or (image_folder is not None and image_folder in path.parents):
-                continue
-            if path.parent == self.path and path.name in listed:
-                continue
-            extra.append(path.relative_to(self.path).as_posix())
-        return sorted(extra)
-
-    def _entry_file(self, name: str) -> Path:
-        """The file of manifest entry ``name``; a one-line :class:`DatasetError` when the manifest lists none."""
-        entry = self.manifest["files"].get(name)
-        if entry is None:
-            raise DatasetError(f"dataset {str(self.path)!r}: the manifest lists no {name!r}")
-        return self.path / entry["file"]
-
-    def _check_sha256(self, name: str, digest: str) -> None:
-        entry = self.manifest["files"][name]
-        if digest != entry["sha256"]:
-            raise DatasetError(f"dataset {str(self.path)!r}: {name} ({entry['file']}) does not match its SHA-256 "
-                               "in the manifest (changed after it was written); regenerate the dataset")
-
-    def _unreadable(self, name: str, error: OSError) -> DatasetError:
-        entry = self.manifest["files"][name]
-        if isinstance(error, FileNotFoundError):
-            return DatasetError(f"dataset {str(self.path)!r}: {name} ({entry['file']}) is missing")
-        return DatasetError(f"dataset {str(self.path)!r}: cannot read {name} ({entry['file']}): "
-                            f"{error.strerror or error}")
-
-    def _read_file(self, name: str) -> bytes:
-        """The bytes of manifest entry ``name`` (a small side file), checked against its SHA-256; a one-line
-        :class:`DatasetError` naming the dataset and the table when it is missing or changed."""
-        file = self._entry_file(name)
-        try:
-            data = read_capped(file, f"{self.path}: {name}", DatasetError)
-        except OSError as error:
-            raise self._unreadable(name, error) from None
-        self._check_sha256(name, hashlib.sha256(data).hexdigest())
-        return data
-
-    def _verified_file(self, name: str) -> Path:
-        """The file of manifest entry ``name`` once its SHA-256 (hashed in blocks, never held in memory whole)
-        matches the manifest; checked once per :class:`Dataset` object. Errors as :meth:`_read_file`'s."""
-        if name not in self._verified:
-            self._check_file(name)
-            self._verified.add(name)
-        return self._entry_file(name)
-
-    def _check_file(self, name: str) -> None:
-        """Hash the file of manifest entry ``name`` in blocks and compare with the manifest."""
-        try:
-            digest = file_sha256(self._entry_file(name))
-        except OSError as error:
-            raise self._unreadable(name, error) from None
-        self._check_sha256(name, digest)
+        return self.files.verify()
 
     @cached_property
-    def _verified(self) -> set[str]:
-        """Manifest entries whose file matched its SHA-256."""
-        return set()
+    def files(self) -> ManifestFiles:
+        """The folder's files as the manifest lists them, each checked against its SHA-256 before use."""
+        return ManifestFiles(self.path, self.manifest)
 
     # ------------------------------------------------------------------ metadata
     @property
@@ -233,7 +171,7 @@ class Dataset:
         ``None`` when the manifest lists no such table."""
         if "source_ignored" not in self.manifest["files"]:
             return None
-        return pq.read_table(pa.BufferReader(self._read_file("source_ignored")))
+        return pq.read_table(pa.BufferReader(self.files.read("source_ignored")))
 
     def sample_tokens(self) -> dict[str, int]:
         """nuScenes sample token → frame: an imported nuScenes dataset's own tokens, otherwise
@@ -241,7 +179,7 @@ class Dataset:
         from .tracks_nuscenes import sample_token
 
         if "sample_tokens" in self.manifest["files"]:
-            tokens = json.loads(self._read_file("sample_tokens"))["tokens"]
+            tokens = json.loads(self.files.read("sample_tokens"))["tokens"]
             return {token: frame for frame, token in enumerate(tokens)}
         frames = self.table("ego_poses").column("frame").to_numpy()
         return {sample_token(self.scenario["name"], self.seed, int(f)): int(f) for f in frames}
@@ -251,7 +189,7 @@ class Dataset:
         import: track ids are per scene), or ``None``."""
         if "sample_tokens" not in self.manifest["files"]:
             return None
-        scenes = json.loads(self._read_file("sample_tokens")).get("scenes") or []
+        scenes = json.loads(self.files.read("sample_tokens")).get("scenes") or []
         out = np.zeros(self.frame_count, dtype=np.int64)
         for index, scene in enumerate(scenes):
             out[scene["first_frame"]:scene["first_frame"] + scene["frames"]] = index
@@ -259,14 +197,13 @@ class Dataset:
 
     @cached_property
     def rig(self) -> Rig:
-        return rig_from_dict(json.loads(self._read_file("rig")))
+        return rig_from_dict(json.loads(self.files.read("rig")))
 
     def road_markings(self) -> RoadMarkings | None:
         """The painted lines of the dataset's road (world frame), or None if it recorded none."""
-        path = self.path / "road.json"
-        if not path.exists():
+        if "road" not in self.manifest["files"]:
             return None
-        return RoadMarkings.from_dict(json.loads(path.read_text(encoding="utf-8")))
+        return RoadMarkings.from_dict(json.loads(self.files.read("road")))
 
     def table(self, name: str) -> pa.Table:
         """One of the Parquet tables (:data:`simrig.dataset.tables.SCHEMAS`: ``ego_poses``, ``ground_truth``,
@@ -296,7 +233,7 @@ class Dataset:
         against the table's schema."""
         if name not in SCHEMAS:
             raise KeyError(f"unknown table {name!r}; tables: {', '.join(SCHEMAS)}")
-        file = self._verified_file(name)
+        file = self.files.verified(name)
         try:
             parquet = pq.ParquetFile(file)
         except (pa.ArrowInvalid, OSError) as error:
