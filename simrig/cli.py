@@ -295,6 +295,9 @@ def _register_score(commands) -> None:
     scorer.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
                         help="an [evaluation] key on top of the dataset's (e.g. min_height_px=40, range_m.car=60, "
                              "ignore=false, classes=any); repeatable")
+    scorer.add_argument("--interpolation", choices=("none", "devkit", "corrected"), default="none",
+                        help="fill the gaps inside 3D tracks before the AMOTA family: none (default), devkit (the "
+                             "nuScenes devkit 1.2.0 as shipped, its inverted weights included) or corrected (linear)")
     scorer.set_defaults(run=_cmd_score)
 
 
@@ -305,7 +308,7 @@ def _cmd_score(args: argparse.Namespace) -> int:
     for option in ("json", "errors"):
         _output(getattr(args, option), f"--{option}", inputs=(args.dataset, args.tracks), folder=False)
     report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera,
-                   evaluation=evaluation_overrides(args.evaluation), fmt=args.format)
+                   evaluation=evaluation_overrides(args.evaluation), fmt=args.format, interpolation=args.interpolation)
     print(report.table())
     if args.json is not None:
         args.json.parent.mkdir(parents=True, exist_ok=True)

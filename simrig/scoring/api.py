@@ -25,6 +25,7 @@ from .counts import combine
 from .hota import HOTA
 from .identity import Identity
 from .inputs import camera_sequences, class_sequences
+from .interpolation import INTERPOLATIONS
 
 LOOKBACK_S = 1.0
 """[s] an identity switch is also tagged with the causes of this long before it (see attribution)."""
@@ -35,7 +36,8 @@ UNITS_2D = (HOTA(), _CLEAR, Identity())
 
 def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookback_s: float = LOOKBACK_S,
           camera: str | None = None, truth: GroundTruth | None = None,
-          evaluation: EvaluationConfig | dict | None = None, fmt: str | None = None) -> ScoreReport:
+          evaluation: EvaluationConfig | dict | None = None, fmt: str | None = None,
+          interpolation: str = "none") -> ScoreReport:
     """Score ``tracks`` (a tracks folder or file, or a read :class:`TrackSet`) against ``dataset``.
 
     ``fmt``: the tracks' format — ``simrig``, ``motchallenge``, ``kitti`` or ``nuscenes``
@@ -48,8 +50,12 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     ``truth``: the dataset's ground truth when the caller already holds it (scoring several trackers on one
     dataset reads it once; by default it is read once per :class:`Dataset` object). ``evaluation``: which 2D
     ground truth is ignored — an :class:`EvaluationConfig`, or a dict of keys put on top of the dataset
-    scenario's ``[evaluation]`` table (:mod:`simrig.scenarios.evaluation_schema`).
+    scenario's ``[evaluation]`` table (:mod:`simrig.scenarios.evaluation_schema`). ``interpolation``: how the
+    gaps inside 3D tracks are filled before the AMOTA family — ``none``, ``devkit`` (the nuScenes devkit as
+    shipped) or ``corrected`` (:mod:`simrig.scoring.interpolation`).
     """
+    if interpolation not in INTERPOLATIONS:
+        raise TracksError(f"--interpolation {interpolation!r}: choose one of {', '.join(INTERPOLATIONS)}")
     if not isinstance(dataset, Dataset):
         dataset = Dataset.open(dataset)
     if camera is not None and camera not in dataset.rig.camera_names:
@@ -72,7 +78,7 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     errors = []
     metrics3d = metrics2d = None
     if tracks.tracks3d is not None and camera is None and dataset.has_3d:
-        metrics3d, errors3d = _score_3d(truth, tracks, lookback)
+        metrics3d, errors3d = _score_3d(truth, tracks, lookback, interpolation)
         errors.append(errors3d)
     if dataset.has_2d:
         if has_2d_tracks:
@@ -91,14 +97,15 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
         metrics3d=metrics3d, metrics2d=metrics2d,
         errors=pa.concat_tables(errors) if errors else ERRORS_SCHEMA.empty_table(),
         settings={"lookback_s": lookback_s, **({"camera": camera} if camera is not None else {}), **ground_truth,
+                  **({"interpolation": interpolation} if interpolation != "none" else {}),
                   "evaluation": config.model_dump(mode="json")},
     )
 
 
-def _score_3d(truth: GroundTruth, tracks: TrackSet, lookback: int) -> tuple[dict, pa.Table]:
+def _score_3d(truth: GroundTruth, tracks: TrackSet, lookback: int, interpolation: str) -> tuple[dict, pa.Table]:
     attributor = Attributor(truth, truth.miss_causes_3d, lookback)
     per_class, errors = {}, []
-    for seq in class_sequences(truth, tracks.tracks3d):
+    for seq in class_sequences(truth, tracks.tracks3d, interpolation):
         result = amota_family(seq)
         per_class[seq.label] = {name: result.metrics[name] for name in METRICS_3D}
         if result.best is not None or seq.num_gt_dets:

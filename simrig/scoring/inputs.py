@@ -14,7 +14,7 @@ per-frame scores over its boxes in range (nuScenes).
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -26,6 +26,7 @@ from ..dataset.ground_truth import GroundTruth, per_label
 from ..types import ActorClass
 from .bev import BevSequence, bev_sequence
 from .distractors import split_distractors
+from .interpolation import gaps
 from .sequence import Sequence, sequence_from_rows
 
 CLASS_RANGE_M = {ActorClass(name): value for name, value in NUSCENES_CLASS_RANGE_M.items()}
@@ -78,24 +79,57 @@ def _in_range(truth: GroundTruth, frame: np.ndarray, label: np.ndarray, boxes: n
     return truth.distance_from_ego(frame, boxes[:, :2]) < limit
 
 
-def class_sequences(truth: GroundTruth, tracks3d: TrackRows) -> list[BevSequence]:
-    """One BEV sequence per class present on either side (within the class range)."""
+def class_sequences(truth: GroundTruth, tracks3d: TrackRows, interpolation: str = "none") -> list[BevSequence]:
+    """One BEV sequence per class present on either side (within the class range). ``interpolation``: how the
+    gaps inside each ground-truth and tracker track are filled first (:mod:`simrig.scoring.interpolation`;
+    ``devkit``: as the nuScenes devkit as shipped)."""
     gt_keep = np.nonzero(_in_range(truth, truth.frame, truth.label, truth.boxes))[0]
     track_keep = np.nonzero(_in_range(truth, tracks3d.frame, tracks3d.label, tracks3d.boxes))[0]
     track_ids, inverse = np.unique(tracks3d.track_id[track_keep], return_inverse=True)
-    mean_score = (np.bincount(inverse, weights=tracks3d.score[track_keep], minlength=len(track_ids))
-                  / np.maximum(np.bincount(inverse, minlength=len(track_ids)), 1))
-    track_score = mean_score[inverse]
-    labels = sorted(set(truth.label[gt_keep].tolist()) | set(tracks3d.label[track_keep].tolist()))
+    mean_score = _track_means(inverse, tracks3d.score[track_keep], len(track_ids))
+    gt = _Rows(truth.frame[gt_keep], truth.actor_id[gt_keep], truth.label[gt_keep], truth.boxes[gt_keep][:, :2],
+               truth.boxes[gt_keep][:, 7:9], np.ones(len(gt_keep))).filled(interpolation)
+    tracked = _Rows(tracks3d.frame[track_keep], tracks3d.track_id[track_keep], tracks3d.label[track_keep],
+                    tracks3d.boxes[track_keep][:, :2], tracks3d.boxes[track_keep][:, 7:9],
+                    mean_score[inverse]).filled(interpolation)
+    labels = sorted(set(gt.label.tolist()) | set(tracked.label.tolist()))
     sequences = []
     for label in labels:
-        g = gt_keep[truth.label[gt_keep] == label]
-        in_class = tracks3d.label[track_keep] == label
-        t = track_keep[in_class]
-        sequences.append(bev_sequence(
-            label, truth.frames,
-            truth.frame[g], truth.actor_id[g], truth.boxes[g, :2], truth.boxes[g, 7:9],
-            tracks3d.frame[t], tracks3d.track_id[t], tracks3d.boxes[t, :2], tracks3d.boxes[t, 7:9],
-            track_score[in_class],
-        ))
+        g, t = gt.label == label, tracked.label == label
+        sequences.append(bev_sequence(label, truth.frames, gt.frame[g], gt.ident[g], gt.xy[g], gt.velocity[g],
+                                      tracked.frame[t], tracked.ident[t], tracked.xy[t], tracked.velocity[t],
+                                      tracked.score[t]))
     return sequences
+
+
+def _track_means(track: np.ndarray, score: np.ndarray, tracks: int) -> np.ndarray:
+    """``(tracks,)`` mean score of each track (``track``: each row's track index), each summed as ``np.mean``
+    sums (pairwise, in row order), so that a track's mean is bit-for-bit the devkit's: a score threshold that
+    falls exactly on it keeps or drops the same boxes."""
+    order = np.argsort(track, kind="stable")
+    bounds = np.searchsorted(track[order], np.arange(tracks + 1))
+    return np.array([np.mean(score[order[start:stop]]) for start, stop in zip(bounds[:-1], bounds[1:], strict=True)])
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """BEV rows of one side: frame, id, class, centre ``(n, 2)`` [m], velocity ``(n, 2)`` [m/s], score."""
+
+    frame: np.ndarray
+    ident: np.ndarray
+    label: np.ndarray
+    xy: np.ndarray
+    velocity: np.ndarray
+    score: np.ndarray
+
+    def filled(self, interpolation: str) -> _Rows:
+        """These rows with the gaps of every track filled (:func:`~simrig.scoring.interpolation.gaps`), sorted by
+        frame: a frame's own rows first, then its filled ones in the devkit's order."""
+        added = gaps(self.frame, self.ident, interpolation)
+        joined = _Rows(np.concatenate([self.frame, added.frame]), np.concatenate([self.ident, self.ident[added.right]]),
+                       np.concatenate([self.label, self.label[added.right]]),
+                       np.concatenate([self.xy, added.blend(self.xy)]),
+                       np.concatenate([self.velocity, added.blend(self.velocity)]),
+                       np.concatenate([self.score, added.blend(self.score)]))
+        order = np.argsort(joined.frame, kind="stable")
+        return _Rows(*(getattr(joined, name)[order] for name in ("frame", "ident", "label", "xy", "velocity", "score")))
