@@ -158,7 +158,7 @@ class Scenario(Strict):
     name: PathName
     """Names the default run folder (``runs/NAME-seedN``); :mod:`simrig.names`'s rule."""
     description: str = ""
-    frame_rate_hz: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False)] = 10.0
+    frame_rate_hz: Annotated[float, Field(ge=0.1, le=100, allow_inf_nan=False)] = 10.0
     """[Hz] frames per second of ground truth and sensor output."""
     frames: Annotated[int, Field(ge=1, le=1_000_000)] = 200
     """[-] default number of frames to generate (``--frames`` overrides it)."""

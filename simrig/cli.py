@@ -182,6 +182,8 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from .dataset.manifest import MANIFEST_NAME
 
     dataset = Dataset.open(args.dataset)
+    if args.out is not None and args.out.suffix.lower() != ".png":
+        raise SimrigError(f"--out {str(args.out)!r}: the mosaic is a PNG; name a .png file")
     out = _output(args.out, "--out", folder=False) or Path(args.dataset) / f"mosaic_{args.frame:06d}.png"
     if out.resolve().parent == dataset.path.resolve() and (
             out.name == MANIFEST_NAME or out.name in {entry["file"] for entry in dataset.manifest["files"].values()}):
@@ -204,6 +206,8 @@ def _register_view(commands) -> None:
 def _cmd_view(args: argparse.Namespace) -> int:
     from simrig.figures.viewer import log_run
 
+    if args.save is not None and args.save.suffix.lower() != ".rrd":
+        raise SimrigError(f"--save {str(args.save)!r}: a rerun recording is an .rrd file; name one")
     saved = log_run(args.run_dir, tracker=args.tracker, save=args.save, save_option="--save")
     print(f"wrote     {saved}" if saved is not None else "logged to a rerun viewer")
     return 0
@@ -464,6 +468,8 @@ def _seed_list(text: str) -> list[int]:
         raise argparse.ArgumentTypeError(f"expected seeds separated by commas (0,1), got {text!r}") from None
     if any(seed < 0 for seed in seeds):
         raise argparse.ArgumentTypeError(f"seeds are ≥ 0, got {text!r}")
+    if len(set(seeds)) != len(seeds):
+        raise argparse.ArgumentTypeError(f"a seed is listed twice in {text!r}")
     return seeds
 
 
@@ -509,13 +515,14 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     return 0
 
 
-def _non_negative_float(text: str) -> float:
+def _non_negative_float(text: str, maximum: float = 86_400.0) -> float:
+    """A number of seconds in 0 … ``maximum`` (a day by default: a longer limit or look-back means none)."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0.0 <= value < math.inf:
-        raise argparse.ArgumentTypeError(f"must be a finite number ≥ 0, got {text}")
+    if not 0.0 <= value <= maximum:
+        raise argparse.ArgumentTypeError(f"must be a number in 0 … {maximum:g}, got {text}")
     return value
 
 
@@ -721,9 +728,27 @@ def main(argv: list[str] | None = None) -> int:
                 print("simrig: interrupted (a generation in progress leaves no dataset behind)", file=sys.stderr)
                 return 130
             if isinstance(error, (SimrigError, ScenarioError)):
-                print(f"simrig: error: {error}", file=sys.stderr)
+                print(f"simrig: error: {_one_line(str(error))}", file=sys.stderr)
+                return 2
+            if isinstance(error, OSError):  # the file system said no: a read-only folder, a name too long, ...
+                where = f": {_shortened(error.filename)}" if error.filename else ""
+                print(f"simrig: error: {error.strerror or error}{where}", file=sys.stderr)
+                return 2
+            if isinstance(error, RecursionError):
+                print("simrig: error: an input file is nested too deeply to be read", file=sys.stderr)
                 return 2
             raise
+
+
+def _one_line(message: str) -> str:
+    """A message folded onto one line (a library's error text embedded in ours may hold line breaks)."""
+    return " ".join(part.strip() for part in message.splitlines() if part.strip())
+
+
+def _shortened(name: object, limit: int = 120) -> str:
+    """A path for a message: repr, cut to ``limit`` characters."""
+    text = repr(str(name))
+    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 def console() -> None:

@@ -393,3 +393,50 @@ def test_a_swallowed_ctrl_c_still_stops_the_next_frame():
         with pytest.raises(KeyboardInterrupt):
             stop_if_interrupted()
     stop_if_interrupted()  # outside the block: nothing noted, nothing raised
+
+
+# ---------------------------------------------------------------- the probe's tracebacks, each one line now
+@pytest.fixture
+def hostile_files(tmp_path, run_folder):
+    """A dataset with a manifest nested 100,000 deep, a scenario at 1e-300 Hz, a FIFO, a bench folder whose
+    results table is empty, a replay file."""
+    deep = shutil.copytree(run_folder / "dataset", tmp_path / "deep")
+    (deep / "manifest.json").write_text("[" * 100_000 + "]" * 100_000)
+    (tmp_path / "slow.toml").write_text('extends = "highway_surround6"\nframe_rate_hz = 1e-300\n')
+    _fifo(tmp_path / "fifo.json")
+    bench = shutil.copytree(Path(__file__).resolve().parents[1] / "reports" / "appearance", tmp_path / "bench")
+    table = pq.read_table(bench / "results.parquet")
+    pq.write_table(table.slice(0, 0), bench / "results.parquet")
+    return tmp_path
+
+
+PROBE_CASES = [
+    ("long-path", ["info", "a" * 300], "File name too long"),
+    ("long-out", ["generate", "--frames", "2", "--out", "b" * 300], "File name too long"),
+    ("deep-manifest", ["info", "{tmp}/deep"], "nested too deeply"),
+    ("tiny-frame-rate", ["generate", "{tmp}/slow.toml", "--out", "{tmp}/x"], "frame_rate_hz"),
+    ("render-txt", ["render", "{run}/dataset", "--frame", "0", "--out", "{tmp}/m.txt"], "name a .png file"),
+    ("lookback-huge", ["score", "{run}/dataset", "{run}/tracks/sort", "--lookback", "1e308"], "--lookback"),
+    ("time-limit-tiny", ["track", "{run}/dataset", "--tracker", "sort", "--out", "{tmp}/t", "--frame-time-limit",
+                         "1e-300"], "did not return within"),
+    ("evaluation-twice", ["score", "{run}/dataset", "{run}/tracks/sort", "--evaluation", "min_height_px=1",
+                          "--evaluation", "min_height_px=2"], "given twice"),
+    ("explain-seeds-twice", ["bench", "smoke", "--out", "{tmp}/b", "--explain", "--explain-seeds", "0,0"],
+     "listed twice"),
+    ("view-save-not-rrd", ["view", "{run}", "--save", "{run}/report.md"], "an .rrd file"),
+    ("json-to-a-fifo", ["score", "{run}/dataset", "{run}/tracks/sort", "--json", "{tmp}/fifo.json"], "a FIFO"),
+    ("replay-into-a-dataset", ["replay", "{tmp}/bug.toml", "--out", "{run}/dataset"], "replay folder"),
+    ("cache-in-a-dataset", ["bench", "smoke", "--out", "{tmp}/b2", "--cache", "{run}/dataset"], "--cache"),
+    ("report-of-an-empty-table", ["report", "{tmp}/bench", "--out", "{tmp}/r"], "no row"),
+    ("report-of-a-fifo", ["report", "{tmp}/fifo.json", "--out", "{tmp}/r2"], "Not a directory"),
+]
+
+
+@pytest.mark.parametrize("argv, expected", [case[1:] for case in PROBE_CASES], ids=[case[0] for case in PROBE_CASES])
+def test_the_probes_bad_input_is_one_line(argv, expected, hostile_files, run_folder, small_scenario):
+    from simrig.testing import write_replay
+
+    replay_file = write_replay(hostile_files / "bug.toml", small_scenario, 0, tracker="sort", scores=None)
+    replay_file.write_text(replay_file.read_text().replace("[scores]", "[scores.2d]\nHOTA = 0.5"))
+    words = [word.format(tmp=hostile_files, run=run_folder) for word in argv]
+    _refused(_simrig(*words, cwd=hostile_files, timeout=120), expected)

@@ -11,6 +11,7 @@ from tqdm import tqdm
 
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import check_output_path, check_own_folder, folder_lock
+from ..pipeline.cache import check_cache_folder
 from .engine_names import ENGINES
 from .engines import Interrupted, local_engine, machine_workers, ray_engine
 from .plan import FRAME_SECONDS, Plan, make_plan
@@ -62,6 +63,7 @@ def run_bench(
     cache = Path(cache) if cache is not None else out / "datasets"
     check_output_path(out, what="--out")
     check_own_folder(out, what="bench folder", marker=BENCH_FILE)
+    check_cache_folder(cache)
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out, "simrig bench"):
         return _run(plan, suite, out, cache, engine, workers, address, progress)

@@ -68,7 +68,11 @@ def evaluation_overrides(pairs: list[tuple[str, object]] | None) -> dict:
     {'min_height_px': 40, 'range_m': {'car': 60}}
     """
     out: dict = {}
+    seen: set[str] = set()
     for key, value in pairs or []:
+        if key in seen:
+            raise EvaluationError(f"--evaluation {key} given twice")
+        seen.add(key)
         head, _, entry = key.partition(".")
         if entry:
             table = out.setdefault(head, {})

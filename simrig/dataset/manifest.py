@@ -130,6 +130,8 @@ def read_manifest(folder: Path) -> dict | None:
         return None
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise DatasetError(f"{path}: manifest is not valid JSON ({error})") from None
+    except RecursionError:
+        raise DatasetError(f"{path}: manifest is nested too deeply to be one") from None
     if not isinstance(manifest, dict) or manifest.get("complete") is not True:
         return None
     if manifest.get("format") != FORMAT_NAME:

@@ -59,6 +59,8 @@ def check_output_path(path: Path | str, *, what: str, inputs: Iterable[Path | st
             raise OutputPathError(f"{what} {str(path)!r} is a file, not a folder")
         if not folder and resolved.is_dir():
             raise OutputPathError(f"{what} {str(path)!r} is a folder, not a file")
+        if not folder and not resolved.is_file():
+            raise OutputPathError(f"{what} {str(path)!r} is a FIFO, a device or a socket, not a file to replace")
     for source in inputs:
         if source is None:
             continue

@@ -113,6 +113,8 @@ def log_run(folder: Path | str, *, tracker: str | None = None, save: Path | str 
     dataset_path, tracks_path, errors_path = run_parts(Path(folder), tracker)
     if save is not None:  # before any work: not inside the dataset or tracks read, not a system folder
         check_output_path(save, what=save_option, inputs=(dataset_path, tracks_path), folder=False)
+        if Path(save).is_symlink():  # rerun streams into the file: it would write through the link
+            raise ViewerError(f"{save_option} {str(save)!r} is a symbolic link; simrig does not write through links")
     dataset = Dataset.open(dataset_path)
     truth = dataset.ground_truth
     rig = truth.rig

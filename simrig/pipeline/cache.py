@@ -9,14 +9,28 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from simrig.dataset.outputs import write_text_atomic
+from simrig.dataset.outputs import check_output_path, write_text_atomic
 from simrig.dataset.reader import Dataset
 from simrig.errors import DatasetError, DatasetExistsError
-from simrig.pipeline.content_keys import dataset_key, world_key
+from simrig.pipeline.content_keys import KEY_LENGTH, dataset_key, world_key
 from simrig.scenarios import Scenario
 
 WORLDS_FOLDER = "worlds"
 """Under a cache root: one small file per world key naming a complete dataset of that world."""
+
+
+def check_cache_folder(root: Path) -> None:
+    """Refuse ``root`` as a dataset cache unless it is new, empty or holds only what a cache holds (datasets named
+    by their content key, :data:`WORLDS_FOLDER`, partial folders): never a dataset or a user's folder."""
+    check_output_path(root, what="--cache")
+    if not root.is_dir():
+        return
+    foreign = [entry.name for entry in root.iterdir()
+               if not (entry.name == WORLDS_FOLDER or entry.name.startswith(".")
+                       or (len(entry.name) == KEY_LENGTH and all(c in "0123456789abcdef" for c in entry.name)))]
+    if foreign:
+        raise DatasetError(f"--cache {str(root)!r} holds {foreign[0]!r}, which no dataset cache holds: simrig caches "
+                           "datasets only in a new or empty folder or an earlier cache; choose another --cache")
 
 
 def cached_dataset(scenario: Scenario, seed: int, frames: int | None, root: Path | str) -> Dataset:

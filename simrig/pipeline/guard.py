@@ -59,8 +59,8 @@ def time_limit(seconds: float | None, what: str) -> Iterator[None]:
         raise _Expired
 
     previous = signal.signal(signal.SIGALRM, expired)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
     try:
+        signal.setitimer(signal.ITIMER_REAL, seconds)  # inside the try: a tiny limit may fire at once
         yield
     except _Expired:
         raise TrackerTimeout(f"{what} did not return within {seconds:g} s (the per-frame time limit); "

@@ -7,13 +7,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pandas as pd
+import pyarrow as pa
 import pyarrow.parquet as pq
 
 from ..benchmark.api import BENCH_FILE
 from ..benchmark.results import CAMERAS, CAUSES, RESULTS
 from ..benchmark.suite import TrackerEntry
 from ..errors import SimrigError
-from ..reading import open_regular
+from ..reading import check_regular, open_regular
 
 
 class ReportError(SimrigError):
@@ -47,6 +48,10 @@ class BenchResults:
                                                             if "cause" in frame.columns else []))
 
 
+REQUIRED_COLUMNS = ("scenario", "tracker", "cell", "seed", "sweep", "value", "scored")
+"""Columns of ``results.parquet`` the report reads for every tracker (the metrics vary with the suite)."""
+
+
 def load_bench(path: Path | str) -> BenchResults:
     """The bench folder ``path`` (or the folder of ``path`` = its results.parquet), which must be complete."""
     folder = Path(path)
@@ -65,6 +70,17 @@ def load_bench(path: Path | str) -> BenchResults:
     if not description.get("complete") or not (folder / RESULTS).is_file():
         raise ReportError(f"bench in {str(folder)!r} did not finish; run '{description.get('command')}' again "
                           "to complete it")
-    cameras = pq.read_table(folder / CAMERAS).to_pandas() if (folder / CAMERAS).is_file() else None
-    return BenchResults(folder, pq.read_table(folder / RESULTS).to_pandas(),
-                        pq.read_table(folder / CAUSES).to_pandas(), description, cameras)
+    tables = {}
+    for name in (RESULTS, CAUSES, CAMERAS):
+        if name == CAMERAS and not (folder / name).is_file():
+            continue
+        try:
+            check_regular(folder / name, name, ReportError)
+            tables[name] = pq.read_table(folder / name).to_pandas()
+        except (pa.ArrowInvalid, OSError) as error:
+            raise ReportError(f"{str(folder / name)!r}: not a readable Parquet table ({error})") from None
+    missing = [column for column in REQUIRED_COLUMNS if column not in tables[RESULTS].columns]
+    if missing or not len(tables[RESULTS]):
+        raise ReportError(f"{str(folder / RESULTS)!r}: not a bench's results table ("
+                          + (f"no column {', '.join(missing)})" if missing else "no row)"))
+    return BenchResults(folder, tables[RESULTS], tables[CAUSES], description, tables.get(CAMERAS))

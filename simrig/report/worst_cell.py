@@ -44,7 +44,12 @@ def choose(bench: BenchResults) -> tuple[dict, dict]:
     """(results row, tracker entry) of the worst cell for the suite's first tracker."""
     entry = bench.trackers[0]
     rows = bench.unique_cells(bench.results[bench.results["tracker"] == entry["name"]])
+    if not len(rows):
+        raise ReportError(f"results.parquet holds no row of the suite's first tracker {entry['name']!r}")
     group = group_of(rows["scored"].iloc[0])
+    rows = rows[rows[group.switches].notna()]  # a cell where the tracker failed (timed out) has no count
+    if not len(rows):
+        raise ReportError(f"{entry['name']!r} has no identity-switch count in any cell (it failed everywhere)")
     rows = rows.assign(_hota=rows["2d_HOTA"].fillna(math.inf))
     ordered = rows.sort_values([group.switches, "_hota", "cell"], ascending=[False, True, True], kind="stable")
     return ordered.iloc[0].drop("_hota").to_dict(), entry

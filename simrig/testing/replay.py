@@ -19,7 +19,7 @@ from simrig.scenarios import describe_errors
 from simrig.scenarios.files import read_toml, validate_strict
 from simrig.scenarios.schema import Scenario
 
-from ..dataset.outputs import write_text_atomic
+from ..dataset.outputs import check_output_path, check_own_folder, write_text_atomic
 from ..errors import SimrigError
 from ..pipeline.trust import TrackerReferenceError, check_file_reference
 from ..scoring import ScoreReport
@@ -153,6 +153,9 @@ def replay(path: Path | str, *, tracker: str | None = None, params: dict | None 
             check_file_reference(name, trusted=trust_file, where=f"replay file {str(path)!r}")
         except TrackerReferenceError as error:
             raise ReplayError(str(error)) from None
+    if out is not None:  # it writes out/dataset and out/tracks: never into a dataset or a user's folder
+        check_output_path(out, what="--out")
+        check_own_folder(Path(out), what="replay folder", marker="dataset", made=("tracks",))
     with tempfile.TemporaryDirectory(prefix="simrig-replay-") as scratch:
         root = Path(out) if out is not None else Path(scratch)
         dataset = Dataset.open(generate(loaded.scenario, seed=loaded.seed, out=root / "dataset", overwrite=True).path)

@@ -39,6 +39,8 @@ from ..writer import DatasetWriter
 
 ID_STRIDE = 1_000_000_000
 """Actor id = sequence number × this + the sequence's own id (MOTChallenge and KITTI ids are per sequence)."""
+MAX_IMPORTED_FRAMES = 1_000_000
+"""The most frames an imported sequence may span (a generated scenario's bound too)."""
 SEED = 0
 """An imported dataset has no random streams; its manifest's ``seed`` is 0."""
 SOURCE_IGNORED_FILE = "source_ignored.parquet"

@@ -35,7 +35,7 @@ import numpy as np
 from ...types import Rig
 from ..tracks_kitti import CLASS_OF_TYPE, FIELDS, GROUND_TRUTH_FOLDER
 from ..tracks_motchallenge import integer, number, parse_lines
-from .builder import ID_STRIDE, ImportedTruth, SourceError, check_unique, uncalibrated_camera
+from .builder import ID_STRIDE, MAX_IMPORTED_FRAMES, ImportedTruth, SourceError, check_unique, uncalibrated_camera
 
 FRAME_RATE_HZ = 10.0
 KITTI_IMAGE_SIZE = (1242, 375)
@@ -89,8 +89,9 @@ def read_kitti_truth(src: Path) -> ImportedTruth:
             for column in (c for c in range(len(fields)) if c != 2):
                 number(file, line, fields, column, FIELDS)  # every numeric field must be a number
             frame, track = integer(file, line, fields, 0, FIELDS), integer(file, line, fields, 1, FIELDS)
-            if frame < 0:
-                raise SourceError(f"{file}:{line}: frame {frame} (KITTI frames start at 0)")
+            if not 0 <= frame < MAX_IMPORTED_FRAMES:
+                raise SourceError(f"{file}:{line}: frame {frame} is outside 0 … {MAX_IMPORTED_FRAMES - 1:,} (KITTI "
+                                  "frames start at 0)")
             left, top, right, bottom = (number(file, line, fields, c, FIELDS) for c in range(6, 10))
             if right <= left or bottom <= top:
                 raise SourceError(f"{file}:{line}: empty box {[left, top, right, bottom]} (needs right > left and "

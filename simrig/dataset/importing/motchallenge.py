@@ -45,10 +45,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ...reading import read_capped
 from ...types import ActorClass, Rig
 from ..tracks_file import CLASSES
 from ..tracks_motchallenge import ANY, integer, number, parse_lines
-from .builder import ID_STRIDE, ImportedTruth, SourceError, check_unique, uncalibrated_camera
+from .builder import ID_STRIDE, MAX_IMPORTED_FRAMES, ImportedTruth, SourceError, check_unique, uncalibrated_camera
 
 PEDESTRIAN_CLASS = 1
 CLASS_NAMES = {1: "pedestrian", 2: "person_on_vehicle", 3: "car", 4: "bicycle", 5: "motorbike", 6: "non_mot_vehicle",
@@ -90,17 +91,26 @@ def sequence_folders(src: Path) -> tuple[str, list[Path]]:
     return src.name, folders
 
 
+SEQINFO_BOUNDS = {"seqLength": (1, 1_000_000), "frameRate": (0.1, 100), "imWidth": (1, 65_536), "imHeight": (1, 65_536)}
+"""What a seqinfo.ini value may be (frames, Hz, px): a dataset of simrig's own has the same bounds."""
+
+
 def _seqinfo(folder: Path) -> dict:
     path = folder / "seqinfo.ini"
     if not path.is_file():
         return {}
     parser = configparser.ConfigParser()
     try:
-        parser.read(path)
+        parser.read_string(read_capped(path, "seqinfo.ini", SourceError).decode("utf-8"))
         section = parser["Sequence"]
-        return {key: float(section[key]) for key in ("seqLength", "frameRate", "imWidth", "imHeight") if key in section}
+        info = {key: float(section[key]) for key in ("seqLength", "frameRate", "imWidth", "imHeight") if key in section}
     except (configparser.Error, KeyError, ValueError) as error:
-        raise SourceError(f"{path}: not a MOTChallenge seqinfo.ini ({error})") from None
+        reason = " ".join(str(error).split())  # configparser's text spans lines
+        raise SourceError(f"{path}: not a MOTChallenge seqinfo.ini ({reason})") from None
+    for key, (low, high) in SEQINFO_BOUNDS.items():
+        if key in info and not low <= info[key] <= high:
+            raise SourceError(f"{path}: {key} {info[key]:g} is outside {low:g} … {high:g}")
+    return info
 
 
 def camera_and_label(name: str) -> tuple[str, str | None]:
@@ -120,8 +130,9 @@ def read_sequence(folder: Path, distractors: tuple[int, ...]) -> dict:
     rows = []
     for line, fields in parse_lines(file, ",", 7, COLUMNS):
         frame = integer(file, line, fields, 0, COLUMNS) - 1
-        if frame < 0:
-            raise SourceError(f"{file}:{line}: frame {frame + 1} (MOTChallenge frames start at 1)")
+        if not 0 <= frame < MAX_IMPORTED_FRAMES:
+            raise SourceError(f"{file}:{line}: frame {frame + 1} is outside 1 … {MAX_IMPORTED_FRAMES:,} (MOTChallenge "
+                              "frames start at 1)")
         ident = integer(file, line, fields, 1, COLUMNS)
         if not 0 <= ident < ID_STRIDE:
             raise SourceError(f"{file}:{line}: id {ident} outside 0…{ID_STRIDE - 1}")

@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...reading import open_regular
 from ...types import Rig
 from .builder import ImportedTruth, SourceError
 
@@ -81,7 +82,8 @@ class Tables:
         for name in TABLES:
             path = folder / f"{name}.json"
             try:
-                text = path.read_text(encoding="utf-8")
+                with open_regular(path, f"nuScenes table {name}.json", SourceError) as handle:
+                    text = handle.read().decode("utf-8")
                 records = json.loads(text)
             except FileNotFoundError:
                 raise SourceError(f"{path}: missing (a nuScenes version holds {', '.join(TABLES)} …)") from None
@@ -89,6 +91,8 @@ class Tables:
                 raise SourceError(f"{path}: cannot be read ({error})") from None
             except json.JSONDecodeError as error:
                 raise SourceError(f"{path}:{error.lineno}: not JSON ({error.msg})") from None
+            except RecursionError:
+                raise SourceError(f"{path}: nested too deeply to be a nuScenes table") from None
             if not isinstance(records, list) or not all(isinstance(r, dict) and "token" in r for r in records):
                 raise SourceError(f"{path}:1: not a nuScenes table (a list of records with a token)")
             self.texts[name] = text
@@ -178,6 +182,11 @@ def read_nuscenes_truth(src: Path) -> ImportedTruth:
         samples = _scene_samples(tables, scene)
         scenes.append({"name": scene.get("name", scene["token"]), "token": scene["token"],
                        "first_frame": len(tokens), "frames": len(samples)})
+        bad = next((s for s in samples if isinstance(s.get("timestamp"), bool)
+                    or not isinstance(s.get("timestamp"), int)), None)
+        if bad is not None:
+            raise SourceError(f"{tables.folder / 'sample.json'}: sample {bad['token']!r}: timestamp "
+                              f"{bad.get('timestamp')!r} is not an integer number of microseconds")
         first_time = samples[0]["timestamp"]
         scene_times = [start + 1e-6 * (s["timestamp"] - first_time) for s in samples]
         start = scene_times[-1] + SCENE_GAP_S
