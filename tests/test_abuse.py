@@ -250,6 +250,24 @@ def test_a_dataset_file_replaced_by_a_fifo_or_a_device_is_refused(command, targe
     _refused(_simrig(*argv, cwd=tmp_path, timeout=60), "not a regular file")
 
 
+DATASET_FILES = ("manifest.json", "rig.json", "road.json", "ego_poses.parquet", "frames.parquet",
+                 "ground_truth.parquet", "projections.parquet", "visibility.parquet", "detections.parquet",
+                 "sensor_truth.parquet")
+
+
+@pytest.mark.parametrize("target", ["fifo", "/dev/zero"])
+@pytest.mark.parametrize("name", DATASET_FILES)
+def test_every_dataset_file_replaced_by_a_fifo_or_a_device_is_refused_by_verify(name, target, run_folder, tmp_path):
+    dataset = shutil.copytree(run_folder / "dataset", tmp_path / "dataset")
+    assert sorted(p.name for p in dataset.iterdir()) == sorted(DATASET_FILES)  # the list covers every file
+    (dataset / name).unlink()
+    if target == "fifo":
+        _fifo(dataset / name)
+    else:
+        (dataset / name).symlink_to(target)
+    _refused(_simrig("info", dataset, "--verify", cwd=tmp_path, timeout=60), "not a regular file")
+
+
 def test_a_manifest_that_is_a_fifo_is_refused(run_folder, tmp_path):
     dataset = shutil.copytree(run_folder / "dataset", tmp_path / "dataset")
     (dataset / "manifest.json").unlink()
