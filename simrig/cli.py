@@ -522,7 +522,7 @@ def _non_negative_float(text: str, maximum: float = 86_400.0) -> float:
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
     if not 0.0 <= value <= maximum:
-        raise argparse.ArgumentTypeError(f"must be a number in 0 … {maximum:g}, got {text}")
+        raise argparse.ArgumentTypeError(f"must be a finite number in 0 … {maximum:g}, got {text}")
     return value
 
 

@@ -192,3 +192,30 @@ def test_the_cycle_finder_finds_a_cycle_through_a_function_level_import(tmp_path
     graph = {"simrig.pipeline.cache": runtime_imported("simrig.pipeline.cache", first),
              "simrig.pipeline.generate": runtime_imported("simrig.pipeline.generate", second)}
     assert import_cycles(graph) == [["simrig.pipeline.cache", "simrig.pipeline.generate"]]
+
+
+def _documented_layers() -> list[tuple[str, str]]:
+    """(layer name, its paragraph) of the README's numbered layer list, bottom first."""
+    import re
+
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    found = re.findall(r"^\s*\d+\. \*\*([a-z ]+)\*\* — (.*?)(?=^\s*\d+\. \*\*|^\S|\Z)", text, flags=re.M | re.S)
+    return [(name, " ".join(paragraph.split())) for name, paragraph in found]
+
+
+def test_the_layer_map_in_the_readme_is_the_tests() -> None:
+    documented = _documented_layers()
+    assert [name for name, _ in documented] == list(LAYERS)
+    known = modules()
+    missing = []
+    for (layer, paragraph), prefixes in zip(documented, LAYERS.values(), strict=True):
+        for prefix in prefixes:
+            if prefix not in known:
+                continue  # a name the map reserves (simrig.__main__) for a module not written
+            last = prefix.rpartition(".")[2]
+            tokens = (f"{last}.py", f"{last}/", prefix, f"`{prefix}`")
+            if prefix == "simrig":
+                tokens = ("simrig/__init__.py",)
+            if not any(token in paragraph for token in tokens):
+                missing.append(f"{layer}: {prefix}")
+    assert missing == []
