@@ -62,7 +62,7 @@ def run_bench(
     out = Path(out) if out is not None else Path("runs") / "bench" / loaded.name
     cache = Path(cache) if cache is not None else out / "datasets"
     check_output_path(out, what="--out")
-    check_own_folder(out, what="bench folder", marker=BENCH_FILE)
+    check_own_folder(out, what="bench folder", marker=BENCH_FILE, marker_keys=("suite", "command", "cells"))
     check_cache_folder(cache)
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out, "simrig bench"):
@@ -140,7 +140,7 @@ def _description(plan: Plan, suite: str | Path, out: Path, engine: str, cache: P
         "out": str(out),
         "suite_settings": plan.suite.model_dump(mode="json"),
         "engine": engine,
-        "cache": str(cache),
+        "cache": str(cache.absolute()),  # the report finds the datasets from any folder
         "parameters": list(plan.parameters),
         "cells": {key: {"scenario": scenario.model_dump(mode="json"), "seed": seed, "frames": frames}
                   for key, (scenario, seed, frames) in plan.cells.items()},

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import errno
 import fcntl
+import json
 import os
 import shutil
 from collections.abc import Callable, Iterable, Iterator
@@ -20,6 +21,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import SimrigError
+from ..reading import read_capped
 
 SYSTEM_FOLDERS = ("/proc", "/sys", "/dev", "/etc", "/boot", "/bin", "/sbin", "/lib", "/lib32", "/lib64", "/usr",
                   "/var/lib", "/var/log")
@@ -78,21 +80,35 @@ PARTIAL_MARKER = ".simrig-partial"
 """The file inside every partial folder simrig makes: only a folder holding it is ever removed as stale."""
 
 
-def check_own_folder(out: Path, *, what: str, marker: str, made: Iterable[str] = ()) -> None:
+def check_own_folder(out: Path, *, what: str, marker: str, made: Iterable[str] = (),
+                     marker_keys: Iterable[str] = ()) -> None:
     """Refuse ``out`` as the folder of a command that writes several files there unless it is new or empty,
-    holds ``marker`` (the file that command writes first, e.g. ``bench.json``), or holds only names in ``made``
-    (what the command itself writes before its marker) and hidden partial folders. ``what`` names the command's
-    folder in the message (e.g. ``"bench folder"``)."""
+    holds ``marker`` (the file that command writes first, e.g. ``bench.json``; when ``marker_keys`` are given,
+    a JSON object with those keys — a user's own file of that name is not simrig's), or holds only names in
+    ``made`` (what the command itself writes before its marker) and hidden partial folders. ``what`` names the
+    command's folder in the message (e.g. ``"bench folder"``)."""
     if not out.is_dir():
         return
     made = set(made)
     entries = [entry.name for entry in out.iterdir() if entry.name != LOCK_FILE]
-    if not entries or marker in entries:
+    if not entries or (marker in entries and _is_marker(out / marker, tuple(marker_keys))):
         return
     if all(name in made or (name.startswith(".") and ".partial" in name) for name in entries):
         return
     raise OutputPathError(f"{what} {str(out)!r} is not empty and holds no {marker}: simrig writes only into a new "
                           f"or empty folder or one it made; choose another --out")
+
+
+def _is_marker(path: Path, keys: tuple[str, ...]) -> bool:
+    """Whether ``path`` is a marker simrig wrote: any entry when no ``keys`` are asked for, else a regular JSON
+    file holding an object with every key."""
+    if not keys:
+        return True
+    try:
+        document = json.loads(read_capped(path, path.name, OutputPathError))
+    except (OSError, ValueError, OutputPathError):
+        return False
+    return isinstance(document, dict) and all(key in document for key in keys)
 
 
 @contextmanager

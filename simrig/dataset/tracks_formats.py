@@ -16,7 +16,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from simrig.errors import TracksError
-from simrig.reading import open_regular
+from simrig.reading import check_regular, open_regular
 
 from .ground_truth import project_tracks
 from .tracks_file import TRACKS2D_FILE, TRACKS3D_FILE, TrackRows, TrackSet, read_tracks, tracks_in_memory
@@ -71,6 +71,8 @@ def read_tracks_as(path: Path | str, fmt: str | None = None, *, frame_count: int
         raise TracksError(f"--format {fmt!r}: tracks formats are {', '.join(FORMATS)}")
     if not path.exists():
         raise TracksError(f"tracks {str(path)!r} does not exist")
+    if not path.is_dir():
+        check_regular(path, "tracks file", TracksError)  # a FIFO or a device is named as such
     fmt = fmt or detect_format(path, cameras)
     if fmt == "simrig":
         return read_tracks(path, frame_count=frame_count, cameras=cameras)

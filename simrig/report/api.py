@@ -26,7 +26,7 @@ def write_report(results: Path | str, *, out: Path | str | None = None) -> Path:
     bench = load_bench(results)
     out = Path(out) if out is not None else Path("reports") / bench.suite
     check_output_path(out, what="--out")
-    check_own_folder(out, what="report folder", marker=BENCH_FILE)
+    check_own_folder(out, what="report folder", marker=BENCH_FILE, marker_keys=("suite", "command", "cells"))
     out.mkdir(parents=True, exist_ok=True)
     for name in (RESULTS, CAUSES, CAMERAS, BENCH_FILE, EXPLAIN_TABLE):
         if (bench.folder / name).is_file() and (bench.folder / name).resolve() != (out / name).resolve():

@@ -20,7 +20,7 @@ from simrig.figures.birds_eye import plot_bev
 from simrig.figures.mosaic import render_mosaic
 from simrig.pipeline.cache import cached_dataset
 from simrig.pipeline.track import run_tracker
-from simrig.scenarios import Scenario
+from simrig.scenarios.schema import scenario_from_record
 
 from ..dataset import Dataset
 from ..errors import DatasetError
@@ -61,7 +61,7 @@ def _dataset(bench: BenchResults, cell: str, scratch: Path) -> Dataset:
         return Dataset.open(cache)
     except DatasetError:
         spec = bench.description["cells"][cell]
-        scenario = Scenario.model_validate(spec["scenario"])
+        scenario = scenario_from_record(spec["scenario"])  # a resolved dump holds keys a file may not set
         return cached_dataset(scenario, spec["seed"], spec["frames"], scratch)
 
 

@@ -84,7 +84,7 @@ def run_search(space: SearchSpace | str | Path, *, sampler: str = "tpe", seed: i
     out = Path(out) if out is not None else Path("runs") / "search" / path_part(space.config.name, "search space name")
     cache = Path(cache) if cache is not None else out / "datasets"
     check_output_path(out, what="--out")
-    check_own_folder(out, what="search folder", marker=SEARCH_FILE)
+    check_own_folder(out, what="search folder", marker=SEARCH_FILE, marker_keys=("space", "sampler", "seed"))
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out, "simrig search"):
         return _run(space, sampler, seed, (engine, workers, address), out, cache, baseline, shrink_budget,
