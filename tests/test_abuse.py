@@ -458,3 +458,17 @@ def test_the_probes_bad_input_is_one_line(argv, expected, hostile_files, run_fol
     replay_file.write_text(replay_file.read_text().replace("[scores]", "[scores.2d]\nHOTA = 0.5"))
     words = [word.format(tmp=hostile_files, run=run_folder) for word in argv]
     _refused(_simrig(*words, cwd=hostile_files, timeout=120), expected)
+
+
+@pytest.mark.parametrize("command, marker", [("bench", "bench.json"), ("search", "search.json")])
+def test_a_users_own_file_named_like_simrigs_marker_does_not_make_the_folder_simrigs(command, marker, tmp_path,
+                                                                                       capsys):
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    (folder / marker).write_text("my own notes, not simrig's")
+    (folder / "thesis.tex").write_text("years of work")
+    before = _tree(folder)
+    argv = (["bench", "smoke", "--out", folder, "--quiet"] if command == "bench"
+            else ["search", "occlusion_gaps", "--budget", "1", "--out", folder])
+    _main_refuses(argv, capsys, "holds no")
+    assert _tree(folder) == before
