@@ -498,6 +498,7 @@ def _register_explain(commands) -> None:
     explainer.add_argument("--workers", type=_int_at_least(1), default=None,
                            help="processes (local; 1 runs in this process) or CPUs of a local Ray instance")
     explainer.add_argument("--address", default=None, help="Ray cluster to join (default: start a local instance)")
+    explainer.add_argument("--quiet", action="store_true", help="no progress bar")
     _trust_argument(explainer, "the run folder's tracker.json")
     explainer.set_defaults(run=_cmd_explain)
 
@@ -506,7 +507,7 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     from .explain import explain
 
     result = explain(args.run_dir, label=args.label, metrics=args.metric, causes=args.causes, samples=args.samples,
-                     engine=args.engine, workers=args.workers, address=args.address, progress=True,
+                     engine=args.engine, workers=args.workers, address=args.address, progress=not args.quiet,
                      trust_file=args.trust_file)
     print(result.table)
     plots = f"{len(result.plots)} waterfall plot{'s' if len(result.plots) != 1 else ''}"

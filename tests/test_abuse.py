@@ -472,3 +472,10 @@ def test_a_users_own_file_named_like_simrigs_marker_does_not_make_the_folder_sim
             else ["search", "occlusion_gaps", "--budget", "1", "--out", folder])
     _main_refuses(argv, capsys, "holds no")
     assert _tree(folder) == before
+
+
+def test_an_unreachable_ray_address_is_one_line_not_a_hang(run_folder, tmp_path):
+    pytest.importorskip("ray")
+    run = _simrig("explain", run_folder, "--workers", "1", "--samples", "2", "--engine", "ray", "--address",
+                  "127.0.0.1:1", "--quiet", cwd=tmp_path, timeout=60)
+    _refused(run, "no Ray cluster answers there")

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import socket
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from contextlib import contextmanager
@@ -120,6 +121,7 @@ def ray_session(workers: int | None, address: str | None) -> Iterator[ModuleType
     started_here = not ray.is_initialized()
     if started_here:
         if address or os.environ.get("RAY_ADDRESS"):
+            _check_reachable(address or os.environ["RAY_ADDRESS"])
             try:
                 ray.init(address=address, log_to_driver=False)
             except ConnectionError as error:
@@ -132,6 +134,18 @@ def ray_session(workers: int | None, address: str | None) -> Iterator[ModuleType
     finally:
         if started_here:
             ray.shutdown()
+
+
+def _check_reachable(address: str, timeout_s: float = 10.0) -> None:
+    """Refuse a ``HOST:PORT`` Ray address nothing answers on within ``timeout_s`` (Ray itself waits minutes);
+    ``auto`` and ``ray://`` addresses are left to Ray."""
+    host, _, port = address.rpartition(":")
+    if address == "auto" or "://" in address or not host or not port.isdigit():
+        return
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout_s).close()
+    except OSError as error:
+        raise SimrigError(f"--address {address!r}: no Ray cluster answers there ({error.strerror or error})") from None
 
 
 def ray_map(function: Callable, items: list, workers: int | None, address: str | None) -> Iterator[tuple]:
