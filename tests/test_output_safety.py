@@ -99,7 +99,7 @@ def test_outputs_inside_an_input_under_a_file_or_in_system_folders_are_refused_b
         (["generate", "--out", str(a_file), "--frames", "2"], "is a file, not a folder"),
         (["run", "--out", "/etc/simrig", "--frames", "2"], "system folder /etc"),
         (["export", ds, "--format", "motchallenge", "--out", "/sys/x"], "system folder /sys"),
-        (["render", ds, "--frame", "0", "--out", f"{ds}/detections.parquet"], "dataset's own files"),
+        (["render", ds, "--frame", "0", "--out", f"{ds}/detections.parquet"], "name a .png file"),
         (["bench", "smoke", "--out", str(tmp_path)], "holds no bench.json"),
     ]
     for argv, message in cases:
