@@ -22,6 +22,7 @@ import pytest
 
 from simrig.cli import main
 
+pytestmark = pytest.mark.timeout(180)  # no case may hang: a blocked read or write fails its test here
 HERE = Path(__file__).resolve().parent
 ZEN = "Beautiful is better than ugly"  # what `import this` prints: the proof that a module was imported
 
