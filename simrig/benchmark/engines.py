@@ -89,9 +89,19 @@ def local_map(function: Callable, items: list, workers: int) -> Iterator[tuple]:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
+QUIET_RESOURCE_TRACKER = "ignore::UserWarning:multiprocessing.resource_tracker"
+"""A ``PYTHONWARNINGS`` entry for multiprocessing's resource tracker: workers stopped at Ctrl-C leave their
+pool's semaphores to it, which it removes at shutdown with a "leaked semaphore" warning printed after simrig's
+own last line (nothing is left behind; the warning only buries the message that says what was kept)."""
+
+
 def process_pool(workers: int) -> ProcessPoolExecutor:
     """A pool of ``workers`` spawned processes that die with this one (see the module docstring): the one
-    pool every simrig command that fans out locally uses."""
+    pool every simrig command that fans out locally uses. The resource tracker multiprocessing starts with the
+    first pool inherits :data:`QUIET_RESOURCE_TRACKER`."""
+    warnings = os.environ.get("PYTHONWARNINGS", "")
+    if QUIET_RESOURCE_TRACKER not in warnings.split(","):
+        os.environ["PYTHONWARNINGS"] = ",".join(filter(None, [warnings, QUIET_RESOURCE_TRACKER]))
     return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
                                initializer=die_with, initargs=(os.getpid(),))
 
