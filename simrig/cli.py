@@ -228,7 +228,6 @@ def _register_replay(commands) -> None:
 def _cmd_replay(args: argparse.Namespace) -> int:
     from .testing.replay import replay
 
-    _output(args.out, "--out")
     result = replay(args.file, tracker=args.tracker, params=_params(args.param) if args.param else None, out=args.out,
                     trust_file=args.trust_file)
     print(result.report.table())
@@ -430,7 +429,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     from .dataset import Dataset
 
-    _output(args.out, "--out")
     with _naming_scenario_file(args.scenario):
         result = run_pipeline(
             args.scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=args.out,
@@ -573,8 +571,6 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from .benchmark import run_bench
     from .benchmark.api import BenchInterrupted
 
-    _output(args.out, "--out")
-    _output(args.cache, "--cache")
     _check_explain_options(args)
     try:
         result = run_bench(args.suite, engine=args.engine, workers=args.workers, out=args.out, cache=args.cache,
@@ -613,7 +609,6 @@ def _register_report(commands) -> None:
 def _cmd_report(args: argparse.Namespace) -> int:
     from .report import write_report
 
-    _output(args.out, "--out")
     print(write_report(args.results, out=args.out))
     return 0
 

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..dataset.outputs import write_text_atomic
 from ..errors import SimrigError
+from ..reading import check_regular
 from ..sensor.processes import ar1_coefficient
 from .reid import (
     EmbeddingLog,
@@ -84,12 +85,11 @@ def read_embedding_log(path: Path | str) -> EmbeddingLog:
     import pyarrow.parquet as pq
 
     path = Path(path)
-    if path.exists() and not path.is_file():
-        raise SimrigError(f"--embeddings {str(path)!r}: not a regular file (a folder, a FIFO or a device); a Parquet "
-                          f"table with columns {', '.join(COLUMNS)} expected")
-    if not path.is_file():
+    try:
+        check_regular(path, "--embeddings", SimrigError)  # a folder, a FIFO or a device named as such
+    except FileNotFoundError:
         raise SimrigError(f"--embeddings {str(path)!r}: no such file (a Parquet table with columns "
-                          f"{', '.join(COLUMNS)})")
+                          f"{', '.join(COLUMNS)})") from None
     try:
         table = pq.read_table(path)
     except (pa.ArrowException, OSError) as error:
