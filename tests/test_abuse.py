@@ -480,3 +480,16 @@ def test_an_unreachable_ray_address_is_one_line_not_a_hang(run_folder, tmp_path)
     run = _simrig("explain", run_folder, "--workers", "1", "--samples", "2", "--engine", "ray", "--address",
                   "127.0.0.1:1", "--quiet", cwd=tmp_path, timeout=60)
     _refused(run, "no Ray cluster answers there")
+
+
+def test_a_bench_of_more_than_an_hour_says_so_before_it_starts(capsys):
+    from types import SimpleNamespace
+
+    from simrig.benchmark.api import _warn_if_long
+    from simrig.benchmark.plan import FRAME_SECONDS
+
+    frames = int(3600 / FRAME_SECONDS) + 1  # just over an hour on one worker
+    _warn_if_long([SimpleNamespace(frames=frames)], workers=1, engine="local")
+    assert "roughly 1.0 h on 1 workers" in capsys.readouterr().err
+    _warn_if_long([SimpleNamespace(frames=frames)], workers=2, engine="local")  # half an hour: nothing said
+    assert capsys.readouterr().err == ""

@@ -111,7 +111,8 @@ def _warn_if_long(jobs: list, workers: int, engine: str) -> None:
     seconds = frames * FRAME_SECONDS / max(workers, 1)
     if seconds > 3600 and engine == "local":
         print(f"simrig: {len(jobs):,} cells to run ({frames:,} frames): roughly {seconds / 3600:.1f} h on {workers} "
-              "workers at ~0.05 s per frame and worker; Ctrl-C keeps every finished cell and a rerun resumes",
+              f"workers at ~{FRAME_SECONDS:g} s per frame and worker; Ctrl-C keeps every finished cell and a rerun "
+              "resumes",
               file=sys.stderr)
 
 
