@@ -298,9 +298,9 @@ def _register_score(commands) -> None:
     scorer.add_argument("--evaluation", type=_tracker_param, action="append", metavar="KEY=VALUE",
                         help="an [evaluation] key on top of the dataset's (e.g. min_height_px=40, range_m.car=60, "
                              "ignore=false, classes=any); repeatable")
-    scorer.add_argument("--interpolation", choices=("none", "devkit", "corrected"), default="none",
-                        help="fill the gaps inside 3D tracks before the AMOTA family: none (default), devkit (the "
-                             "nuScenes devkit 1.2.0 as shipped, its inverted weights included) or corrected (linear)")
+    scorer.add_argument("--interpolation", choices=("devkit", "corrected", "none"), default="devkit",
+                        help="fill the gaps inside 3D tracks before the AMOTA family: devkit (default: the nuScenes "
+                             "devkit 1.2.0 as shipped, its inverted weights included), corrected (linear) or none")
     scorer.set_defaults(run=_cmd_score)
 
 

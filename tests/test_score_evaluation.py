@@ -2,6 +2,8 @@
 (TrackEval's MotChallenge2DBox preprocessing), class-agnostic scoring, and the settings' validation."""
 
 import numpy as np
+import pyarrow as pa
+import pyarrow.compute  # noqa: F401  (pa.compute)
 import pytest
 from simrig.scenarios import ScenarioError, load_scenario
 from simrig.scenarios.evaluation_schema import EvaluationConfig
@@ -166,3 +168,48 @@ def test_ground_truth_is_read_once_per_dataset_for_several_trackers(small_datase
     held = score(Dataset.open(small_dataset.path), runs[1], truth=dataset.ground_truth)
     assert len(reads) == 1 and held.metrics2d["overall"] == second.metrics2d["overall"]
     assert first.metrics2d["overall"] != second.metrics2d["overall"]
+
+
+def test_a_3d_trackers_boxes_beyond_the_class_range_are_dropped_before_2d_scoring():
+    """The devkit drops predictions at or beyond the class range (``filter_eval_boxes``); the 2D evaluation
+    region ignores ground truth there. So a 3D tracker's far boxes are dropped before they are projected, not
+    counted as 2D false positives: car at 49.9 m kept, 50.0 m dropped; motorcycle at 39.9 m kept, 40.0 m dropped
+    (ego at the origin, the stereo pair facing +x, every box straight ahead and in view)."""
+    from simrig.dataset.evaluation import projected_in_range
+    from simrig.dataset.ground_truth import project_tracks
+
+    truth = hand_built_truth([("car", 10.0, TALL, 0.0, 0.0)])
+    xs, labels = [49.9, 50.0, 39.9, 40.0, 10.0], ["car", "car", "motorcycle", "motorcycle", "truck"]
+    boxes = np.zeros((5, 9))
+    boxes[:, 0], boxes[:, 2], boxes[:, 3:6] = xs, 0.8, (4.0, 1.8, 1.6)
+    tracks3d = TrackRows(np.zeros(5, np.int64), np.arange(5), np.array(labels, dtype=object), np.ones(5), boxes)
+    everything = project_tracks(truth, tracks3d)
+    assert sorted(set(everything.track_id.tolist())) == [0, 1, 2, 3, 4]  # all in view
+    kept = projected_in_range(truth, tracks3d, EvaluationConfig())
+    assert sorted(set(kept.track_id.tolist())) == [0, 2, 4]
+    same = np.isin(everything.track_id, [0, 2, 4])
+    np.testing.assert_array_equal(kept.boxes, everything.boxes[same])  # the kept ones projected as before
+    assert len(projected_in_range(truth, tracks3d, EvaluationConfig(ignore=False))) == len(everything)
+    wider = projected_in_range(truth, tracks3d, EvaluationConfig(range_m=60.0))
+    assert len(wider) == len(everything)
+
+
+def test_a_3d_trackers_far_boxes_are_no_2d_false_positives_in_score(small_dataset, tmp_path):
+    """End to end: a 3D tracker's boxes moved beyond the class range add nothing to its 2D false positives."""
+    import pyarrow.parquet as pq
+
+    from simrig.pipeline.track import run_tracker
+    from simrig.scoring import score
+
+    run = run_tracker(small_dataset, "saga", tmp_path / "saga")
+    before = score(small_dataset, run.out).metrics2d["overall"]
+    table = pq.read_table(run.out / "tracks3d.parquet")
+    far = table.set_column(table.schema.get_field_index("x"), "x",
+                           pa.compute.add(table.column("x"), 500.0))  # every box far ahead of its place
+    moved = tmp_path / "moved"
+    moved.mkdir()
+    pq.write_table(pa.concat_tables([table, far.set_column(
+        far.schema.get_field_index("track_id"), "track_id", pa.compute.add(far.column("track_id"), 10_000))]),
+        moved / "tracks3d.parquet")
+    after = score(small_dataset, moved).metrics2d["overall"]
+    assert after["CLR_FP"] == before["CLR_FP"] and after["HOTA"] == before["HOTA"]

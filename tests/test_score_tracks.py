@@ -8,6 +8,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from simrig.cli import main
+from simrig.dataset.evaluation import IgnoreRule, evaluation_of, ignore_rules
 from simrig.dataset.ground_truth import load_ground_truth
 from simrig.dataset.tracks_file import TRACKS2D_SCHEMA, TRACKS3D_SCHEMA
 from simrig.errors import TracksError
@@ -109,17 +110,21 @@ def ground_truth_tracks(truth, jitter_rng=None):
 
 
 def test_perfect_tracker_scores_one_and_nothing_is_dropped(small_dataset, tmp_path):
-    """Exact boxes under renamed ids: AMOTA 1, MOTA 1, IDS 0, HOTA 1 and no error. Every projected 2D box is
-    a TP, an FP or removed because it sits on an ignored box (none silently dropped); with the evaluation
-    region off, every one is a TP."""
+    """Exact boxes under renamed ids: AMOTA 1, MOTA 1, IDS 0, HOTA 1 and no error. The boxes beyond the class
+    range are dropped before projection (as the devkit drops far predictions), so the ground truth ignored for
+    its range is left untracked — listed as ignored, never an error — and every other projected 2D box is a TP,
+    an FP or removed because it sits on an ignored box (none silently dropped); with the evaluation region off,
+    every one is a TP."""
     truth = load_ground_truth(small_dataset)
     write_tracks(tmp_path / "perfect", ground_truth_tracks(truth))
     report = score(small_dataset, tmp_path / "perfect")
     overall3d, overall2d = report.metrics3d["overall"], report.metrics2d["overall"]
     assert (overall3d["AMOTA"], overall3d["MOTA"], overall3d["IDS"], overall3d["AMOTP"]) == (1.0, 1.0, 0, 0.0)
     assert (overall2d["HOTA"], overall2d["MOTA"], overall2d["IDF1"], overall2d["IDSW"]) == (1.0, 1.0, 1.0, 0)
-    assert set(report.errors.column("kind").to_pylist()) <= {"IGN"}  # no error; nothing left untracked either
-    assert report.errors.num_rows == 0
+    assert set(report.errors.column("kind").to_pylist()) <= {"IGN"}  # no error
+    far = ignore_rules(truth, evaluation_of(small_dataset.scenario)) & int(IgnoreRule.RANGE) != 0
+    assert report.errors.num_rows == int(far.sum()) > 0  # untracked: exactly the ground truth beyond range
+    assert all("ignored_range" in causes for causes in report.errors.column("causes").to_pylist())
     ignored = report.metrics2d["ground_truth"]["overall"]
     assert 0 < ignored["ignored"] < ignored["boxes"] == int(truth.in_view.sum())
     assert overall2d["CLR_TP"] + overall2d["CLR_FP"] + ignored["ignored"] == int(truth.in_view.sum())

@@ -14,7 +14,8 @@ from simrig.scenarios import describe_errors
 from simrig.scenarios.evaluation_schema import EvaluationConfig
 
 from ..errors import SimrigError
-from .ground_truth import SOURCE_KINDS, GroundTruth, per_label
+from .ground_truth import SOURCE_KINDS, GroundTruth, per_label, project_tracks
+from .tracks_file import TrackRows
 
 
 class EvaluationError(SimrigError):
@@ -108,6 +109,18 @@ def ignore_rules(truth: GroundTruth, config: EvaluationConfig) -> np.ndarray:
         bits[marked == 1 + SOURCE_KINDS.index("unevaluated")] |= int(IgnoreRule.UNEVALUATED)
     rules[row, camera] = bits
     return rules
+
+
+def projected_in_range(truth: GroundTruth, tracks3d: TrackRows, config: EvaluationConfig) -> TrackRows:
+    """A 3D tracker's boxes projected into the cameras (:func:`~simrig.dataset.ground_truth.project_tracks`)
+    for 2D scoring, those whose centre is at or beyond its class range from the ego (BEV, the range the
+    :attr:`IgnoreRule.RANGE` rule ignores ground truth at) dropped first, as the nuScenes devkit's
+    ``filter_eval_boxes`` drops predictions beyond the range. With ``ignore`` off every box is kept, as every
+    ground-truth box is scored."""
+    if config.ignore and len(tracks3d):
+        limit = per_label(tracks3d.label, config.class_range_m)
+        tracks3d = tracks3d.take(truth.distance_from_ego(tracks3d.frame, tracks3d.boxes[:, :2]) < limit)
+    return project_tracks(truth, tracks3d)
 
 
 KEEPS_MATCHES = int(IgnoreRule.UNEVALUATED)

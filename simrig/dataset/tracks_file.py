@@ -70,6 +70,11 @@ class TrackRows:
     def __len__(self) -> int:
         return len(self.frame)
 
+    def take(self, rows: np.ndarray) -> TrackRows:
+        """These rows at ``rows`` (indices or a boolean mask), in that order."""
+        return TrackRows(self.frame[rows], self.track_id[rows], self.label[rows], self.score[rows], self.boxes[rows],
+                         None if self.camera is None else self.camera[rows])
+
 
 @dataclass(frozen=True, eq=False)
 class TrackSet:

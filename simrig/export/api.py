@@ -16,8 +16,7 @@ from pathlib import Path
 from simrig.dataset.tracks_file import TrackSet, read_tracks
 
 from ..dataset import Dataset
-from ..dataset.evaluation import evaluation_of, ignore_rules
-from ..dataset.ground_truth import project_tracks
+from ..dataset.evaluation import evaluation_of, ignore_rules, projected_in_range
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import (
     PARTIAL_MARKER,
@@ -73,7 +72,7 @@ def export(dataset: Dataset | Path | str, fmt: str, out: Path | str, *, tracks: 
         if track_set.tracks2d is not None and len(track_set.tracks2d):
             rows2d = track_set.tracks2d
         elif rows3d is not None:
-            rows2d = project_tracks(truth, rows3d)
+            rows2d = projected_in_range(truth, rows3d, config)
         name = Path(tracks).stem if Path(tracks).is_file() else Path(tracks).name
     data = ExportInput(dataset, truth, config, ignored, rows2d, rows3d, name)
     out.parent.mkdir(parents=True, exist_ok=True)

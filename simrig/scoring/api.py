@@ -13,8 +13,8 @@ from simrig.scenarios.evaluation_schema import EvaluationConfig
 from simrig.scoring.results import METRICS_2D, METRICS_3D, ScoreReport
 
 from ..dataset import Dataset
-from ..dataset.evaluation import evaluation_of, ignore_rules, ignored_counts
-from ..dataset.ground_truth import GroundTruth, project_tracks
+from ..dataset.evaluation import evaluation_of, ignore_rules, ignored_counts, projected_in_range
+from ..dataset.ground_truth import GroundTruth
 from ..errors import TracksError
 from .amota import amota_family, combine_classes
 from .attribution import ERRORS_SCHEMA, Attributor
@@ -37,22 +37,25 @@ UNITS_2D = (HOTA(), _CLEAR, Identity())
 def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookback_s: float = LOOKBACK_S,
           camera: str | None = None, truth: GroundTruth | None = None,
           evaluation: EvaluationConfig | dict | None = None, fmt: str | None = None,
-          interpolation: str = "none") -> ScoreReport:
+          interpolation: str = "devkit") -> ScoreReport:
     """Score ``tracks`` (a tracks folder or file, or a read :class:`TrackSet`) against ``dataset``.
 
     ``fmt``: the tracks' format — ``simrig``, ``motchallenge``, ``kitti`` or ``nuscenes``
     (:mod:`simrig.dataset.tracks_formats`); detected from the path when ``None``.
 
-    With ``camera``, only that camera is scored, in 2D (a 2D tracker's own boxes there, or a 3D tracker's
-    projected into it) against the actors in its view, and the 3D metrics are left out: how a per-camera
-    tracker and one that uses the other cameras compare on one camera's ground truth.
+    In 2D a 3D tracker's boxes are projected into the cameras, those beyond their class range dropped first as
+    the devkit drops far predictions (:func:`~simrig.dataset.evaluation.projected_in_range`). With ``camera``,
+    only that camera is scored, in 2D (a 2D tracker's own boxes there, or a 3D tracker's projected into it)
+    against the actors in its view, and the 3D metrics are left out: how a per-camera tracker and one that uses
+    the other cameras compare on one camera's ground truth.
 
     ``truth``: the dataset's ground truth when the caller already holds it (scoring several trackers on one
     dataset reads it once; by default it is read once per :class:`Dataset` object). ``evaluation``: which 2D
     ground truth is ignored — an :class:`EvaluationConfig`, or a dict of keys put on top of the dataset
     scenario's ``[evaluation]`` table (:mod:`simrig.scenarios.evaluation_schema`). ``interpolation``: how the
-    gaps inside 3D tracks are filled before the AMOTA family — ``none``, ``devkit`` (the nuScenes devkit as
-    shipped) or ``corrected`` (:mod:`simrig.scoring.interpolation`).
+    gaps inside 3D tracks are filled before the AMOTA family — ``devkit`` (the default: the nuScenes devkit
+    1.2.0 as shipped, so the numbers compare with published ones), ``corrected`` or ``none``
+    (:mod:`simrig.scoring.interpolation`).
     """
     if interpolation not in INTERPOLATIONS:
         raise TracksError(f"--interpolation {interpolation!r}: choose one of {', '.join(INTERPOLATIONS)}")
@@ -84,7 +87,7 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
         if has_2d_tracks:
             rows2d, source = tracks.tracks2d, "tracks2d"
         elif tracks.tracks3d is not None:
-            rows2d, source = project_tracks(truth, tracks.tracks3d), "projected 3D tracks"
+            rows2d, source = projected_in_range(truth, tracks.tracks3d, config), "projected 3D tracks"
         else:
             rows2d, source = tracks.tracks2d, "tracks2d"
         metrics2d, errors2d = _score_2d(truth, rows2d, lookback, camera, config)
@@ -97,7 +100,7 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
         metrics3d=metrics3d, metrics2d=metrics2d,
         errors=pa.concat_tables(errors) if errors else ERRORS_SCHEMA.empty_table(),
         settings={"lookback_s": lookback_s, **({"camera": camera} if camera is not None else {}), **ground_truth,
-                  **({"interpolation": interpolation} if interpolation != "none" else {}),
+                  "interpolation": interpolation,
                   "evaluation": config.model_dump(mode="json")},
     )
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from simrig.dataset.outputs import write_text_atomic
+from simrig.dataset.outputs import atomic_file, write_text_atomic
 from simrig.scoring.attribution import IGNORED, errors_by_cause
 
 METRICS_3D = ("AMOTA", "AMOTP", "MOTAR", "MOTA", "MOTP", "RECALL", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN",
@@ -20,6 +20,10 @@ METRICS_3D = ("AMOTA", "AMOTP", "MOTAR", "MOTA", "MOTP", "RECALL", "IDS", "FRAG"
 METRICS_2D = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDSW", "Frag", "MT", "PT", "ML", "IDF1", "IDP",
               "IDR", "CLR_TP", "CLR_FN", "CLR_FP")
 """2D metrics, TrackEval style (MOTP: mean IoU of matches)."""
+INTERPOLATION_WORDS = {"devkit": "track gaps filled as nuscenes-devkit 1.2.0 does",
+                       "corrected": "track gaps filled linearly", "none": "track gaps not filled"}
+"""How the 3D heading of :meth:`ScoreReport.table` names each ``interpolation``
+(:mod:`simrig.scoring.interpolation`)."""
 IGNORED_COLUMNS = ("boxes", "ignored", "range", "height", "visibility", "truncation", "source", "unevaluated",
                    "delivered")
 """Per camera: ground-truth boxes in view, how many are ignored, and by each rule (a box may break several;
@@ -61,14 +65,17 @@ class ScoreReport:
         write_text_atomic(Path(path), json.dumps(self.to_dict(), indent=2) + "\n")
 
     def write_errors(self, path: Path | str) -> None:
-        """Every error with its causes, as Parquet."""
-        pq.write_table(self.errors, path)
+        """Every error with its causes, as Parquet (written atomically: the old file or the new one)."""
+        with atomic_file(Path(path)) as temporary:
+            pq.write_table(self.errors, temporary)
 
     def table(self) -> str:
         """The readable summary ``simrig score`` prints."""
         lines = [f"dataset   {self.dataset} ({self.scenario}, seed {self.seed})", f"tracks    {self.tracks}"]
         if self.metrics3d is not None:
-            lines += ["", "3D (BEV centre distance < 2 m; class ranges 50 m, motorcycle, pedestrian, bicycle 40 m)"]
+            filled = INTERPOLATION_WORDS.get(self.settings.get("interpolation", "none"), "")
+            lines += ["", "3D (BEV centre distance < 2 m; class ranges 50 m, motorcycle, pedestrian, bicycle 40 m; "
+                          f"{filled})"]
             lines += _grid(METRICS_3D, {"overall": self.metrics3d["overall"], **self.metrics3d["per_class"]})
         elif self.settings.get("ground_truth") == "2d only":
             lines += ["", "3D: not scored (the dataset's ground truth is 2D only)"]
