@@ -80,7 +80,7 @@ PRESETS: dict[str, dict[str, Any]] = {
 """Preset name → its ``[sensor]`` tables (values the scenario does not set)."""
 
 
-def merge_tables(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
+def _merge_tables(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
     """``override`` on top of ``base``, tables merged key by key (the scenario loader's rule). ``base`` is taken as
     a file would give it (pairs as lists): scenarios are validated strictly with JSON's rules, where a tuple is
     not an array."""
@@ -95,7 +95,7 @@ def with_preset(raw: dict[str, Any]) -> dict[str, Any]:
     sensor = raw.get("sensor")
     if not isinstance(sensor, dict) or not isinstance(sensor.get("preset"), str) or sensor["preset"] not in PRESETS:
         return raw
-    merged = merge_tables(PRESETS[sensor["preset"]], sensor)
+    merged = _merge_tables(PRESETS[sensor["preset"]], sensor)
     rows = sensor.get("confusion", {}).get("matrix") if isinstance(sensor.get("confusion"), dict) else None
     if isinstance(rows, dict) and isinstance(merged.get("confusion", {}).get("matrix"), dict):
         # a row of the confusion matrix is one distribution: the scenario's row replaces the preset's whole

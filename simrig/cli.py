@@ -250,8 +250,8 @@ def _register_export(commands) -> None:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
-    from .dataset.evaluation import evaluation_overrides
-    from .export import export
+    from simrig.formats.evaluation import evaluation_overrides
+    from simrig.formats.export import export
 
     out = export(args.dataset, args.format, args.out, tracks=args.tracks, overwrite=args.overwrite,
                  evaluation=evaluation_overrides(args.evaluation))
@@ -271,8 +271,9 @@ def _register_import(commands) -> None:
 
 
 def _cmd_import(args: argparse.Namespace) -> int:
+    from simrig.formats.importing import import_dataset
+
     from .dataset import Dataset
-    from .dataset.importing import import_dataset
 
     import_dataset(args.format, args.src, args.out, overwrite=args.overwrite)
     print(Dataset.open(args.out).summary())
@@ -305,7 +306,8 @@ def _register_score(commands) -> None:
 
 
 def _cmd_score(args: argparse.Namespace) -> int:
-    from .dataset.evaluation import evaluation_overrides
+    from simrig.formats.evaluation import evaluation_overrides
+
     from .scoring import score
 
     for option in ("json", "errors"):

@@ -213,7 +213,7 @@ def _clip_faces_to_image(
 
 def project_boxes(boxes: np.ndarray, rig: Rig, ego: EgoPose) -> Projection:
     """Project world-frame 3D boxes (``(N, ≥7)``, :data:`~simrig.types.BOX3D_FIELDS` order) into every camera."""
-    return project_boxes_from(boxes, rig, camera_from_world(rig, ego)[:, None])
+    return _project_boxes_from(boxes, rig, camera_from_world(rig, ego)[:, None])
 
 
 def project_boxes_at(boxes: np.ndarray, rig: Rig, egos: list[EgoPose], pose_of_box: np.ndarray) -> Projection:
@@ -221,10 +221,10 @@ def project_boxes_at(boxes: np.ndarray, rig: Rig, egos: list[EgoPose], pose_of_b
     ``egos[pose_of_box[i]]`` — the same numbers as one :func:`project_boxes` call per pose."""
     world_from_ego = np.stack([ego.world_from_ego() for ego in egos])  # (F, 4, 4)
     transforms = np.linalg.inv(world_from_ego[:, None] @ _ego_from_cameras(rig))  # (F, C, 4, 4)
-    return project_boxes_from(boxes, rig, np.swapaxes(transforms[pose_of_box], 0, 1))
+    return _project_boxes_from(boxes, rig, np.swapaxes(transforms[pose_of_box], 0, 1))
 
 
-def project_boxes_from(boxes: np.ndarray, rig: Rig, transforms: np.ndarray) -> Projection:
+def _project_boxes_from(boxes: np.ndarray, rig: Rig, transforms: np.ndarray) -> Projection:
     """Project world-frame 3D boxes (``(N, ≥7)``) into every camera with ``transforms`` ``(C, N, 4, 4)`` taking
     each box's world frame to each camera's (``(C, 1, 4, 4)``: one pose for every box)."""
     boxes = np.asarray(boxes, dtype=float)

@@ -385,7 +385,7 @@ def test_tracks_outside_their_ranges_are_refused_naming_the_row(column, value, t
 
 
 def test_a_nuscenes_box_with_a_zero_quaternion_is_refused(small_dataset, saga_tracks, tmp_path, capsys):
-    from simrig.export import export
+    from simrig.formats.export import export
 
     exported = export(small_dataset.path, "nuscenes", tmp_path / "export", tracks=saga_tracks)
     results = next(path for path in exported.rglob("*.json") if path.name == "saga.json")

@@ -22,6 +22,13 @@ from simrig.benchmark.results import write_table_atomic  # noqa: E402
 from simrig.dataset import outputs  # noqa: E402
 from simrig.dataset.manifest import write_json_atomic  # noqa: E402
 from simrig.dataset.outputs import save_figure, write_bytes_atomic, write_text_atomic  # noqa: E402
+from simrig.scoring.attribution import ERRORS_SCHEMA  # noqa: E402
+from simrig.scoring.results import ScoreReport  # noqa: E402
+
+
+def _report() -> ScoreReport:
+    return ScoreReport(dataset="d", tracks="t", scenario="s", seed=0, metrics3d=None, metrics2d=None,
+                       errors=ERRORS_SCHEMA.empty_table(), settings={})
 
 
 def _figure():
@@ -36,6 +43,8 @@ WRITERS = {
     "write_json_atomic": lambda path: write_json_atomic(path, {"new": True}),
     "write_table_atomic": lambda path: write_table_atomic(pa.table({"a": [1, 2]}), path),
     "save_figure": lambda path: save_figure(_figure(), path),
+    "ScoreReport.write_errors": lambda path: _report().write_errors(path),
+    "ScoreReport.write_json": lambda path: _report().write_json(path),
 }
 
 

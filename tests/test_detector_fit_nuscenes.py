@@ -17,7 +17,7 @@ from simrig.scenarios import load_scenario
 
 from simrig.cli import main
 from simrig.dataset import Dataset
-from simrig.dataset.tracks_nuscenes import sample_token
+from simrig.formats.nuscenes.samples import sample_token
 from simrig.pipeline.generate import generate
 
 KNOWN = {"depth_a": 0.15, "depth_b": 0.01, "lateral": 0.1, "size": 0.05, "yaw_deg": 4.0, "flip": 0.05,

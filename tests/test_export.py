@@ -11,8 +11,8 @@ import trackeval
 
 from simrig.cli import main
 from simrig.dataset.ground_truth import load_ground_truth
-from simrig.export import api as export_api
-from simrig.export import export
+from simrig.formats import export as export_api
+from simrig.formats.export import export
 from simrig.pipeline.track import run_tracker
 from simrig.scoring import score
 
@@ -77,8 +77,8 @@ def test_trackeval_equals_simrig_with_tracker_boxes_on_ignored_boxes(small_datas
     exactly on every other ignored box and one shifted to IoU 0.6 on the rest (where boxes overlap, the
     preprocessing's Hungarian decides which ground truth a tracker box belongs to)."""
     truth = load_ground_truth(small_dataset)
-    from simrig.dataset.evaluation import evaluation_of, ignore_rules
     from simrig.dataset.tracks_file import TRACKS2D_FILE, TRACKS2D_SCHEMA
+    from simrig.formats.evaluation import evaluation_of, ignore_rules
 
     rules = ignore_rules(truth, evaluation_of(small_dataset.scenario, settings))
     rng = np.random.default_rng(5)
@@ -114,7 +114,7 @@ def test_kitti_labels_hold_every_box_in_view_with_the_projected_depth_and_dont_c
     truth = load_ground_truth(small_dataset)
     projections = small_dataset.table("projections").to_pylist()
     depth = {(p["frame"], p["actor_id"], p["camera"]): p["depth"] for p in projections}
-    from simrig.dataset.evaluation import evaluation_of, ignore_rules
+    from simrig.formats.evaluation import evaluation_of, ignore_rules
 
     rules = ignore_rules(truth, evaluation_of(small_dataset.scenario))
     truncation = {(p["frame"], p["actor_id"], p["camera"]): p["truncation"] for p in projections}

@@ -14,8 +14,9 @@ import pytest
 
 from simrig.cli import main
 from simrig.dataset import Dataset
-from simrig.dataset.importing import import_dataset
-from simrig.export import export
+from simrig.formats.export import export
+from simrig.formats.importing import import_dataset
+from simrig.formats.nuscenes.samples import sample_tokens, scene_of_frame
 from simrig.scoring import score
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -117,7 +118,7 @@ def test_nuscenes_import_reads_the_devkit_tables(tmp_path):
     assert dataset.frame_count == 24 + 18 and dataset.scenario["frame_rate_hz"] == pytest.approx(2.0)
     assert dataset.rig.cameras == () and dataset.has_3d and not dataset.has_2d
     assert dataset.source["left_out_boxes"]["no_points"] == 2  # one per scene
-    tokens = dataset.sample_tokens()
+    tokens = sample_tokens(dataset)
     assert tokens["scene-a-sample-000"] == 0 and tokens["scene-b-sample-000"] == 24
     poses = json.loads((tmp_path / "nu" / VERSION / "ego_pose.json").read_text())
     truth = dataset.ground_truth
@@ -127,10 +128,10 @@ def test_nuscenes_import_reads_the_devkit_tables(tmp_path):
     ids = {(k >= 24, box["tracking_id"]) for k, boxes in enumerate(tracks.values()) for box in boxes}
     report = score(dataset, results)
     assert report.metrics3d["overall"]["TP"] > 0 and report.metrics2d is None
-    from simrig.dataset.tracks_formats import read_tracks_as
+    from simrig.formats.tracks import read_tracks_as
 
     read = read_tracks_as(results, "nuscenes", frame_count=dataset.frame_count, cameras=(), tokens=tokens,
-                          scenes=dataset.scene_of_frame())
+                          scenes=scene_of_frame(dataset))
     assert len(np.unique(read.tracks3d.track_id)) == len(ids)
 
 
@@ -186,8 +187,8 @@ def test_nuscenes_export_loads_in_the_devkit(small_dataset, saga_tracks, tmp_pat
     """The export's tables and split run through the devkit's own TrackingEval, with simrig's AMOTA family."""
     if not DEVKIT_PYTHON.exists():
         pytest.skip(f"no nuscenes-devkit environment at {DEVKIT_PYTHON} (set SIMRIG_NUSCENES_PYTHON)")
-    from simrig.export.nuscenes import SPLIT as EXPORT_SPLIT
-    from simrig.export.nuscenes import VERSION as EXPORT_VERSION
+    from simrig.formats.nuscenes.writer import SPLIT as EXPORT_SPLIT
+    from simrig.formats.nuscenes.writer import VERSION as EXPORT_VERSION
 
     out = export(small_dataset, "nuscenes", tmp_path / "export", tracks=saga_tracks)
 
@@ -295,7 +296,7 @@ def test_tracks_of_the_missing_dimension_are_refused(tmp_path, capsys):
     import_dataset("motchallenge", tmp_path / "mot", tmp_path / "mot-ds")
     mot_ds = Dataset.open(tmp_path / "mot-ds")
     tokens = {f"{mot_ds.scenario['name']}-seed0-{f:06d}": f for f in range(3)}
-    assert set(tokens) <= set(mot_ds.sample_tokens())
+    assert set(tokens) <= set(sample_tokens(mot_ds))
     document = json.loads(results.read_text())
     boxes = next(iter(document["results"].values()))
     (tmp_path / "r3d.json").write_text(json.dumps({"results": {token: boxes for token in tokens}}))

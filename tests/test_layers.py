@@ -22,7 +22,8 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "geometry": ("simrig.geometry", "simrig.rig"),
     "trackers": ("simrig.trackers",),
     "making data": ("simrig.world", "simrig.render", "simrig.sensor"),
-    "storage": ("simrig.dataset", "simrig.dataset.importing", "simrig.export"),
+    "storage": ("simrig.dataset",),
+    "formats": ("simrig.formats",),
     "judging": ("simrig.scoring", "simrig.detector"),
     "pipeline": ("simrig.pipeline",),
     "orchestration": ("simrig.benchmark", "simrig.search", "simrig.testing", "simrig.explain"),
@@ -36,7 +37,8 @@ ALLOWED: dict[str, set[str]] = {
     "trackers": {"records", "geometry", "trackers"},  # never the world, renderer, sensor, dataset or scorer
     "making data": {*BELOW_DATA, "making data"},
     "storage": {*BELOW_DATA, "making data", "storage"},
-    "judging": {*BELOW_DATA, "making data", "storage", "judging"},  # never a tracker: each is a black box
+    "formats": {*BELOW_DATA, "making data", "storage", "formats"},  # outside formats over simrig's own storage
+    "judging": {*BELOW_DATA, "making data", "storage", "formats", "judging"},  # never a tracker: each is a black box
     "pipeline": set(LAYERS) - {"orchestration", "faces"},
     "orchestration": set(LAYERS) - {"faces"},
     "faces": set(LAYERS),

@@ -10,9 +10,9 @@ from simrig.scenarios.evaluation_schema import EvaluationConfig
 from simrig.scenarios.schema import RigConfig
 
 from simrig.cli import main
-from simrig.dataset.evaluation import EvaluationError, IgnoreRule, evaluation_of, ignore_rules, ignored_counts
 from simrig.dataset.ground_truth import GroundTruth
 from simrig.dataset.tracks_file import TrackRows
+from simrig.formats.evaluation import EvaluationError, IgnoreRule, evaluation_of, ignore_rules, ignored_counts
 from simrig.rig import build_rig
 from simrig.scoring.api import UNITS_2D
 from simrig.scoring.counts import combine
@@ -175,8 +175,8 @@ def test_a_3d_trackers_boxes_beyond_the_class_range_are_dropped_before_2d_scorin
     region ignores ground truth there. So a 3D tracker's far boxes are dropped before they are projected, not
     counted as 2D false positives: car at 49.9 m kept, 50.0 m dropped; motorcycle at 39.9 m kept, 40.0 m dropped
     (ego at the origin, the stereo pair facing +x, every box straight ahead and in view)."""
-    from simrig.dataset.evaluation import projected_in_range
     from simrig.dataset.ground_truth import project_tracks
+    from simrig.formats.evaluation import projected_in_range
 
     truth = hand_built_truth([("car", 10.0, TALL, 0.0, 0.0)])
     xs, labels = [49.9, 50.0, 39.9, 40.0, 10.0], ["car", "car", "motorcycle", "motorcycle", "truck"]

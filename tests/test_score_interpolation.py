@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simrig.scoring.interpolation import gaps
+from simrig.formats.nuscenes.interpolation import gaps
 
 
 def test_a_two_frame_gap_gets_the_devkits_inverted_weights_or_the_linear_ones():

@@ -8,10 +8,10 @@ import pyarrow.parquet as pq
 import pytest
 
 from simrig.cli import main
-from simrig.dataset.evaluation import IgnoreRule, evaluation_of, ignore_rules
 from simrig.dataset.ground_truth import load_ground_truth
 from simrig.dataset.tracks_file import TRACKS2D_SCHEMA, TRACKS3D_SCHEMA
 from simrig.errors import TracksError
+from simrig.formats.evaluation import IgnoreRule, evaluation_of, ignore_rules
 from simrig.scoring import read_tracks, score, write_tracks
 from simrig.types import ActorClass, Box2D, Box3D, Track
 

@@ -13,7 +13,7 @@ import pytest
 
 from simrig.cli import main
 from simrig.dataset.tracks_file import TRACKS3D_FILE
-from simrig.export import export
+from simrig.formats.export import export
 from simrig.scoring import score
 
 
@@ -111,7 +111,7 @@ def test_bad_files_get_one_line_naming_file_and_line(small_dataset, tmp_path, ca
 def test_layouts_and_ids_without_a_dataset(tmp_path):
     """Detection of each layout, KITTI types (pedestrians kept) and DontCare, nuScenes string ids and yaw (a
     class simrig has not, trailer, left out), on hand-written files."""
-    from simrig.dataset.tracks_formats import detect_format, read_tracks_as
+    from simrig.formats.tracks import detect_format, read_tracks_as
 
     cameras = ("left", "right")
     kitti = tmp_path / "kitti"

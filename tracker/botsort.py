@@ -41,12 +41,12 @@ SIGMA_POSITION, SIGMA_VELOCITY, SIGMA_MEASUREMENT = 0.05, 0.00625, 0.05
 """BoT-SORT's noise factors, multiplied by the box's width or height."""
 
 
-def box_to_xywh(box: np.ndarray) -> np.ndarray:
+def _box_to_xywh(box: np.ndarray) -> np.ndarray:
     """(x1, y1, x2, y2) → (centre x, centre y, width, height) [px]."""
     return np.array([(box[0] + box[2]) / 2, (box[1] + box[3]) / 2, box[2] - box[0], box[3] - box[1]])
 
 
-def xywh_to_box(state: np.ndarray) -> np.ndarray:
+def _xywh_to_box(state: np.ndarray) -> np.ndarray:
     cx, cy, w, h = (float(v) for v in np.ravel(state)[:4])
     return np.array([cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2])
 
@@ -56,7 +56,7 @@ def _scaled(w: float, h: float, factor: float) -> np.ndarray:
     return np.array([w, h, w, h]) * factor
 
 
-def rotation_homographies(rig: Rig, before: EgoPose, now: EgoPose) -> np.ndarray:
+def _rotation_homographies(rig: Rig, before: EgoPose, now: EgoPose) -> np.ndarray:
     """``(C, 3, 3)``: per camera, the image homography K·R·K⁻¹ of the camera's rotation R from the ``before`` pose to
     ``now`` (pixels of the earlier image to pixels of the later one, for points at infinity)."""
     relative = camera_from_world(rig, now) @ np.linalg.inv(camera_from_world(rig, before))
@@ -64,7 +64,7 @@ def rotation_homographies(rig: Rig, before: EgoPose, now: EgoPose) -> np.ndarray
     return k @ relative[:, :3, :3] @ np.linalg.inv(k)
 
 
-def local_affine(homography: np.ndarray, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
+def _local_affine(homography: np.ndarray, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
     """(A (2, 2), t (2,)): the affine map that agrees with ``homography`` at (x, y) to first order.
 
     >>> a, t = local_affine(np.array([[1.0, 0, 5], [0, 1, -2], [0, 0, 1]]), 10.0, 20.0)
@@ -81,7 +81,7 @@ class BotSortTrack:
 
     def __init__(self, track_id: int, box: np.ndarray, label: int, score: float, embedding: np.ndarray,
                  detection: int, activated: bool):
-        z = box_to_xywh(box)
+        z = _box_to_xywh(box)
         self.kf = KalmanFilter(dim_x=8, dim_z=4)
         self.kf.F = np.eye(8)
         self.kf.F[:4, 4:] = np.eye(4)
@@ -98,7 +98,7 @@ class BotSortTrack:
 
     def compensate(self, homography: np.ndarray) -> None:
         """Warp the state by the camera's motion (see the module docstring)."""
-        a, t = local_affine(homography, float(self.kf.x[0, 0]), float(self.kf.x[1, 0]))
+        a, t = _local_affine(homography, float(self.kf.x[0, 0]), float(self.kf.x[1, 0]))
         warp = np.kron(np.eye(4), a)
         self.kf.x = warp @ self.kf.x
         self.kf.x[:2, 0] += t
@@ -117,11 +117,11 @@ class BotSortTrack:
         self.detection = -1
 
     def box(self) -> np.ndarray:
-        return xywh_to_box(self.kf.x)
+        return _xywh_to_box(self.kf.x)
 
     def update(self, box: np.ndarray, score: float, embedding: np.ndarray, detection: int, alpha: float) -> None:
         w, h = self.size()
-        self.kf.update(box_to_xywh(box), R=np.diag(np.square(_scaled(w, h, SIGMA_MEASUREMENT))))
+        self.kf.update(_box_to_xywh(box), R=np.diag(np.square(_scaled(w, h, SIGMA_MEASUREMENT))))
         if _usable(embedding):
             unit = embedding / np.linalg.norm(embedding)
             feature = unit if self.feature is None else alpha * self.feature + (1 - alpha) * unit
@@ -246,5 +246,5 @@ def botsort(*, track_high_thresh: float = 0.6, track_low_thresh: float = 0.1, ne
                         proximity_thresh=proximity_thresh, appearance_thresh=appearance_thresh,
                         track_buffer=track_buffer, alpha=alpha),
         tuple(name for name in cameras.split(",") if name) or None,
-        motion=rotation_homographies if motion_compensation else None,
+        motion=_rotation_homographies if motion_compensation else None,
     )

@@ -61,7 +61,7 @@ class FrameCounter:
         return frames
 
 
-def camera_track(track: LocalTrack, camera: str, track_id: int) -> Track:
+def _camera_track(track: LocalTrack, camera: str, track_id: int) -> Track:
     """A :class:`~simrig.types.Track` with ``track``'s box in ``camera``, under ``track_id``."""
     x1, y1, x2, y2 = (float(v) for v in track.box)
     return Track(track_id, LABELS[track.label], float(track.score), boxes2d={camera: Box2D(x1, y1, x2, y2)})
@@ -111,5 +111,5 @@ class PerCameraTracking:
                 key = (name, local.track_id)
                 if key not in self._ids:
                     self._ids[key] = len(self._ids) + 1
-                out.append(camera_track(local, name, self._ids[key]))
+                out.append(_camera_track(local, name, self._ids[key]))
         return out

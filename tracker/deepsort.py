@@ -35,7 +35,7 @@ POSITION_WEIGHT = 1.0 / 20.0
 VELOCITY_WEIGHT = 1.0 / 160.0
 
 
-def box_to_xyah(box: np.ndarray) -> np.ndarray:
+def _box_to_xyah(box: np.ndarray) -> np.ndarray:
     """(x1, y1, x2, y2) → (centre x, centre y, aspect w/h, height) [px, px, -, px]."""
     w, h = box[2] - box[0], box[3] - box[1]
     return np.array([box[0] + w / 2, box[1] + h / 2, w / h, h])
@@ -55,12 +55,12 @@ def _noise(height: float, position: tuple[float, ...], velocity: tuple[float, ..
     return np.diag(np.square(std))
 
 
-def new_xyah_filter(box: np.ndarray) -> KalmanFilter:
+def _new_xyah_filter(box: np.ndarray) -> KalmanFilter:
     kf = KalmanFilter(dim_x=8, dim_z=4)
     kf.F = np.eye(8)
     kf.F[:4, 4:] = np.eye(4)
     kf.H = np.eye(4, 8)
-    z = box_to_xyah(box)
+    z = _box_to_xyah(box)
     kf.x[:4, 0] = z
     p, v = 2 * POSITION_WEIGHT, 10 * VELOCITY_WEIGHT
     kf.P = _noise(z[3], (p, p, 1e-2, p), (v, v, 1e-5, v))
@@ -72,7 +72,7 @@ class DeepSortTrack:
 
     def __init__(self, track_id: int, box: np.ndarray, label: int, score: float, embedding: np.ndarray,
                  detection: int, confirmed: bool, budget: int):
-        self.track_id, self.kf, self.label, self.score = track_id, new_xyah_filter(box), label, score
+        self.track_id, self.kf, self.label, self.score = track_id, _new_xyah_filter(box), label, score
         self.gallery: deque[np.ndarray] = deque(maxlen=budget)
         if np.isfinite(embedding).all() and len(embedding):
             self.gallery.append(embedding)
@@ -97,7 +97,7 @@ class DeepSortTrack:
     def update(self, box: np.ndarray, score: float, embedding: np.ndarray, detection: int, n_init: int) -> None:
         h = float(self.kf.x[3, 0])
         p = POSITION_WEIGHT
-        self.kf.update(box_to_xyah(box), R=_noise(h, (p, p, 1e-1, p)))
+        self.kf.update(_box_to_xyah(box), R=_noise(h, (p, p, 1e-1, p)))
         if np.isfinite(embedding).all() and len(embedding):
             self.gallery.append(embedding)
         self.score, self.detection = score, detection
@@ -189,7 +189,7 @@ class DeepSort:
         n, m = len(self.tracks), len(detections)
         cost = np.full((n, m), np.inf)
         has = np.isfinite(detections.embeddings).all(axis=1) & (detections.embeddings.shape[1] > 0)
-        measurements = np.stack([box_to_xyah(b) for b in detections.boxes2d])
+        measurements = np.stack([_box_to_xyah(b) for b in detections.boxes2d])
         for i, track in enumerate(self.tracks):
             if not track.gallery:
                 continue

@@ -48,7 +48,7 @@ COSTS_2D = {"mahalanobis": 5.0, "iou": 0.9, "centre": 0.5}
 units)."""
 
 
-def centre_distance(projected: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+def _centre_distance(projected: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     """(N, M) distance between box centres over the projected box's diagonal [-].
 
     >>> centre_distance(np.array([[0.0, 0.0, 30.0, 40.0]]), np.array([[10.0, 0.0, 40.0, 40.0]])).tolist()
@@ -103,7 +103,7 @@ class Mutr3dTracker(KalmanTracker):
                 elif self.cost2d == "iou":
                     cost[seen] = 1.0 - iou(boxes[seen], mine)
                 else:
-                    cost[seen] = centre_distance(boxes[seen], mine)
+                    cost[seen] = _centre_distance(boxes[seen], mine)
             cost[labels[:, None] != detections.labels[rows][None, :]] = np.inf
             out.append((rows, cost))
         return out

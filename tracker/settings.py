@@ -7,7 +7,7 @@ from .life import LIFE_RULES, HitsAndAge, QueryLife
 from .motion import KalmanConfig
 
 
-def build_cost(cost: str, gate: float | None, **extra):
+def _build_cost(cost: str, gate: float | None, **extra):
     """The cost model ``cost`` with ``gate`` (its default when None) and any extra settings."""
     params = dict(extra)
     if gate is not None:
@@ -36,7 +36,7 @@ def kalman_tracker_parts(*, cost: str, gate: float | None, life: str, min_hits: 
     """Keyword arguments of :class:`~simrig.trackers.kalman_tracker.KalmanTracker` every reference tracker shares:
     the cost model, the life rule, the filter settings and the score threshold."""
     return {
-        "cost": build_cost(cost, gate, **cost_extra),
+        "cost": _build_cost(cost, gate, **cost_extra),
         "life": build_life(life, min_hits=min_hits, max_age_s=max_age_s),
         "kalman": build_kalman(measurement_variance),
         "score_threshold": float(score_threshold),

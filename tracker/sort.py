@@ -20,13 +20,13 @@ from .camera_tracking import LocalTrack, PerCameraTracking
 from .detections import DetectionArrays
 
 
-def box_to_measurement(box: np.ndarray) -> np.ndarray:
+def _box_to_measurement(box: np.ndarray) -> np.ndarray:
     """(x1, y1, x2, y2) [px] → (u, v, s, r): centre [px], area [px²], aspect w/h."""
     w, h = box[2] - box[0], box[3] - box[1]
     return np.array([box[0] + w / 2, box[1] + h / 2, w * h, w / h])
 
 
-def state_to_box(x: np.ndarray) -> np.ndarray:
+def _state_to_box(x: np.ndarray) -> np.ndarray:
     """(u, v, s, r, …) → (x1, y1, x2, y2) [px]; an empty box at the centre if the area is not positive."""
     u, v, s, r = (float(value) for value in np.ravel(x)[:4])
     w = np.sqrt(max(s * r, 0.0))
@@ -34,7 +34,7 @@ def state_to_box(x: np.ndarray) -> np.ndarray:
     return np.array([u - w / 2, v - h / 2, u + w / 2, v + h / 2])
 
 
-def new_box_filter(box: np.ndarray) -> KalmanFilter:
+def _new_box_filter(box: np.ndarray) -> KalmanFilter:
     """A filterpy filter started at ``box`` with zero velocity."""
     kf = KalmanFilter(dim_x=7, dim_z=4)
     kf.F = np.eye(7)
@@ -43,7 +43,7 @@ def new_box_filter(box: np.ndarray) -> KalmanFilter:
     kf.R = np.diag([1.0, 1.0, 10.0, 10.0])
     kf.P = np.diag([10.0, 10.0, 10.0, 10.0, 1e4, 1e4, 1e4])
     kf.Q = np.diag([1.0, 1.0, 1.0, 1.0, 1e-2, 1e-2, 1e-4])
-    kf.x[:4, 0] = box_to_measurement(box)
+    kf.x[:4, 0] = _box_to_measurement(box)
     return kf
 
 
@@ -53,7 +53,7 @@ class SortTrack:
     __slots__ = ("track_id", "kf", "label", "score", "hits", "hit_streak", "age", "time_since_update", "detection")
 
     def __init__(self, track_id: int, box: np.ndarray, label: int, score: float, detection: int):
-        self.track_id, self.kf, self.label, self.score = track_id, new_box_filter(box), label, score
+        self.track_id, self.kf, self.label, self.score = track_id, _new_box_filter(box), label, score
         self.hits, self.hit_streak, self.age, self.time_since_update = 1, 1, 0, 0
         self.detection = detection
 
@@ -66,10 +66,10 @@ class SortTrack:
             self.hit_streak = 0
         self.time_since_update += 1
         self.detection = -1
-        return state_to_box(self.kf.x)
+        return _state_to_box(self.kf.x)
 
     def update(self, box: np.ndarray, score: float, detection: int) -> None:
-        self.kf.update(box_to_measurement(box))
+        self.kf.update(_box_to_measurement(box))
         self.detection = detection
         self.time_since_update = 0
         self.hits += 1
@@ -113,7 +113,7 @@ class Sort:
                 self._next_id += 1
         young = self.frame_count <= self.min_hits
         out = [
-            LocalTrack(track.track_id, state_to_box(track.kf.x), track.score, track.label, track.detection)
+            LocalTrack(track.track_id, _state_to_box(track.kf.x), track.score, track.label, track.detection)
             for track in self.tracks
             if track.time_since_update < 1 and (track.hit_streak >= self.min_hits or young)
         ]

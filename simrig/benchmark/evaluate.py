@@ -74,9 +74,9 @@ def evaluate(job: Job) -> tuple[list[Outcome], float]:
             raise BenchError(f"{where}, tracker {entry.name}: {error}") from None
         except Exception as error:  # a user's tracker failing: keep its traceback as the cause
             raise BenchError(f"{where}, tracker {entry.name}: {type(error).__name__}: {error}") from error
-        outcomes.append(Outcome(job.cell, key, metric_values(report), cause_counts(report),
+        outcomes.append(Outcome(job.cell, key, metric_values(report), _cause_counts(report),
                                 run.step_seconds, time.perf_counter() - scoring_started,
-                                scored_as(report, entry.camera), camera_values(report)))
+                                _scored_as(report, entry.camera), _camera_values(report)))
     return outcomes, dataset_s
 
 
@@ -89,7 +89,7 @@ def metric_values(report: ScoreReport) -> dict[str, float]:
     return {name: math.nan if value is None else float(value) for name, value in values.items()}
 
 
-def scored_as(report: ScoreReport, camera: str | None) -> str:
+def _scored_as(report: ScoreReport, camera: str | None) -> str:
     """``3d`` for a tracker scored in 3D, ``2d`` for a 2D-only tracker scored over every camera, or the one
     camera it was scored on."""
     if camera is not None:
@@ -101,7 +101,7 @@ CAMERA_METRICS = ("HOTA", "AssA", "IDF1", "MOTA", "IDSW", "Frag", "CLR_TP", "CLR
 """The 2D metrics kept per camera in the bench's ``cameras.parquet``."""
 
 
-def camera_values(report: ScoreReport) -> dict[str, dict[str, float]]:
+def _camera_values(report: ScoreReport) -> dict[str, dict[str, float]]:
     """Per scored camera: :data:`CAMERA_METRICS` and how many ground-truth boxes were in view and ignored."""
     ignored = report.metrics2d.get("ground_truth", {}).get("per_camera", {})
     return {camera: {**{name: float(values[name]) for name in CAMERA_METRICS},
@@ -110,7 +110,7 @@ def camera_values(report: ScoreReport) -> dict[str, dict[str, float]]:
             for camera, values in report.metrics2d["per_camera"].items()}
 
 
-def cause_counts(report: ScoreReport) -> tuple[tuple[str, str, str, int], ...]:
+def _cause_counts(report: ScoreReport) -> tuple[tuple[str, str, str, int], ...]:
     """(dimension, cause, kind, count) for every non-zero count of the report's errors by cause."""
     return tuple(
         (dimension, cause, kind, int(count))

@@ -101,8 +101,8 @@ def assemble(plan: Plan, out: Path) -> dict[str, pa.Table]:
                 **{f"{name}_s": value for name, value in fragments[(cell, key)]["seconds"].items()}}
                for cell, pairs in plan.work().items() for key, entry in pairs]
     return {
-        RESULTS: pa.Table.from_pylist(rows, schema=results_schema(plan.parameters)),
-        CAUSES: pa.Table.from_pylist(causes, schema=causes_schema()),
+        RESULTS: pa.Table.from_pylist(rows, schema=_results_schema(plan.parameters)),
+        CAUSES: pa.Table.from_pylist(causes, schema=_causes_schema()),
         CAMERAS: pa.Table.from_pylist(cameras, schema=pa.schema(
             _point_fields() + [("camera", pa.string())] + [(name, pa.float64()) for name in CAMERA_COLUMNS])),
         TIMINGS: pa.Table.from_pylist(timings, schema=pa.schema([
@@ -116,12 +116,12 @@ def _point_fields() -> list[tuple[str, pa.DataType]]:
     return [(name, types.get(name, pa.string())) for name in POINT_COLUMNS]
 
 
-def results_schema(parameters: tuple[str, ...]) -> pa.Schema:
+def _results_schema(parameters: tuple[str, ...]) -> pa.Schema:
     return pa.schema(_point_fields() + [(PARAMETER_PREFIX + name, pa.float64()) for name in parameters]
                      + [(name, pa.float64()) for name in METRIC_COLUMNS] + [(FAILURE, pa.string())])
 
 
-def causes_schema() -> pa.Schema:
+def _causes_schema() -> pa.Schema:
     return pa.schema(_point_fields() + [("dimension", pa.string()), ("cause", pa.string()),
                                         ("kind", pa.string()), ("count", pa.int64())])
 

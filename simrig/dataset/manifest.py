@@ -79,7 +79,7 @@ def _plain_name(name: object) -> bool:
             and "\0" not in name)
 
 
-def check_manifest(path: Path, manifest: dict) -> None:
+def _check_manifest(path: Path, manifest: dict) -> None:
     """Refuse a complete manifest that was edited or that points outside its folder (one line naming the key)."""
     files = manifest.get("files")
     if not isinstance(files, dict) or not files:
@@ -140,5 +140,5 @@ def read_manifest(folder: Path) -> dict | None:
         raise DatasetError(
             f"{path}: format_version {manifest.get('format_version')!r}; this simrig reads {FORMAT_VERSION}"
         )
-    check_manifest(path, manifest)
+    _check_manifest(path, manifest)
     return manifest

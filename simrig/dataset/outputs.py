@@ -115,7 +115,7 @@ def _is_marker(path: Path, keys: tuple[str, ...]) -> bool:
 def folder_lock(out: Path, command: str) -> Iterator[None]:
     """Hold ``OUT/.lock`` for this process while ``command`` (e.g. ``"simrig bench"``) writes into ``out``: a
     second command in the same folder stops at once, naming it."""
-    handle = open_for_writing(out / LOCK_FILE, "a+")
+    handle = _open_for_writing(out / LOCK_FILE, "a+")
     try:
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -127,7 +127,7 @@ def folder_lock(out: Path, command: str) -> Iterator[None]:
         handle.close()
 
 
-def open_for_writing(path: Path, mode: str = "w", **options):
+def _open_for_writing(path: Path, mode: str = "w", **options):
     """``open(path, mode)`` that refuses to follow a symbolic link at ``path`` (``O_NOFOLLOW``): a link
     planted where simrig writes is an :class:`OutputPathError` naming it, never a write to what it points at."""
     flags = os.O_WRONLY | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC
@@ -164,7 +164,7 @@ def atomic_file(path: Path) -> Iterator[Path]:
 
 def write_bytes_atomic(path: Path, data: bytes) -> None:
     """``data`` into ``path`` through :func:`atomic_file`."""
-    with atomic_file(path) as temporary, open_for_writing(temporary, "wb") as handle:
+    with atomic_file(path) as temporary, _open_for_writing(temporary, "wb") as handle:
         handle.write(data)
 
 

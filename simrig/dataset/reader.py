@@ -173,28 +173,6 @@ class Dataset:
             return None
         return pq.read_table(pa.BufferReader(self.files.read("source_ignored")))
 
-    def sample_tokens(self) -> dict[str, int]:
-        """nuScenes sample token → frame: an imported nuScenes dataset's own tokens, otherwise
-        ``SCENARIO-seedN-FFFFFF`` (:func:`simrig.dataset.tracks_nuscenes.sample_token`)."""
-        from .tracks_nuscenes import sample_token
-
-        if "sample_tokens" in self.manifest["files"]:
-            tokens = json.loads(self.files.read("sample_tokens"))["tokens"]
-            return {token: frame for frame, token in enumerate(tokens)}
-        frames = self.table("ego_poses").column("frame").to_numpy()
-        return {sample_token(self.scenario["name"], self.seed, int(f)): int(f) for f in frames}
-
-    def scene_of_frame(self) -> np.ndarray | None:
-        """``(F,)`` the scene index of every frame of an imported dataset made of several scenes (a nuScenes
-        import: track ids are per scene), or ``None``."""
-        if "sample_tokens" not in self.manifest["files"]:
-            return None
-        scenes = json.loads(self.files.read("sample_tokens")).get("scenes") or []
-        out = np.zeros(self.frame_count, dtype=np.int64)
-        for index, scene in enumerate(scenes):
-            out[scene["first_frame"]:scene["first_frame"] + scene["frames"]] = index
-        return out
-
     @cached_property
     def rig(self) -> Rig:
         return rig_from_dict(json.loads(self.files.read("rig")))

@@ -131,11 +131,11 @@ def frame_columns(
         "ground_truth": truth,
         "projections": projections,
         "visibility": visibility_columns,
-        **sensor_columns(state.frame, state.timestamp, sensor),
+        **_sensor_columns(state.frame, state.timestamp, sensor),
     }
 
 
-def sensor_columns(frame: int, timestamp: float, sensor: SensorOutput) -> dict[str, dict]:
+def _sensor_columns(frame: int, timestamp: float, sensor: SensorOutput) -> dict[str, dict]:
     """The ``detections``, ``sensor_truth`` and ``frames`` columns of one frame of sensor output, for every
     camera at once (rows by camera in rig order; detections by their index in the camera's list, truth rows
     actors then false positives)."""

@@ -131,7 +131,7 @@ class TrackTables:
         return tables
 
 
-def track_tables(frames: Iterable[tuple[int, Iterable[Track]]]) -> dict[str, pa.Table]:
+def _track_tables(frames: Iterable[tuple[int, Iterable[Track]]]) -> dict[str, pa.Table]:
     """The tables of ``(frame, tracks)`` pairs (as returned by a tracker, frame by frame), by file name
     (:meth:`TrackTables.tables`)."""
     builder = TrackTables()
@@ -141,11 +141,11 @@ def track_tables(frames: Iterable[tuple[int, Iterable[Track]]]) -> dict[str, pa.
 
 
 def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]] | dict[str, pa.Table]) -> Path:
-    """Write ``(frame, tracks)`` pairs (or the tables :func:`track_tables` made of them) to the folder ``out``.
+    """Write ``(frame, tracks)`` pairs (or the tables :func:`_track_tables` made of them) to the folder ``out``.
     Files are written to a temporary name and renamed, so an interrupted write leaves no partial table."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    tables = frames if isinstance(frames, dict) else track_tables(frames)
+    tables = frames if isinstance(frames, dict) else _track_tables(frames)
     for name in (TRACKS3D_FILE, TRACKS2D_FILE):
         if name not in tables and (out / name).exists():
             (out / name).unlink()  # a stale table from an earlier run must not be scored with this one
@@ -157,7 +157,7 @@ def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]] 
 
 def tracks_in_memory(tables: dict[str, pa.Table], *, frame_count: int, cameras: tuple[str, ...],
                      source: str = "tracker output") -> TrackSet:
-    """A validated :class:`TrackSet` of :func:`track_tables`' tables, without a round trip through files:
+    """A validated :class:`TrackSet` of :func:`_track_tables`' tables, without a round trip through files:
     the same checks as :func:`read_tracks`, errors naming ``source``."""
     rows = {name: _rows(f"{source} ({name})", table.column_names, table.column, name, frame_count, cameras)
             for name, table in tables.items()}
@@ -178,7 +178,7 @@ def _parts_table(parts: list[tuple[np.ndarray, ...]], schema: pa.Schema, box_siz
                      for column, field in zip(columns, schema, strict=True)], schema=schema)
 
 
-def _table(rows: list[tuple], schema: pa.Schema) -> pa.Table:
+def rows_table(rows: list[tuple], schema: pa.Schema) -> pa.Table:
     """One table of row tuples in the schema's column order (the outside formats' readers)."""
     columns = list(zip(*rows, strict=True)) if rows else [[] for _ in schema.names]
     return pa.table([pa.array(list(column), type=field.type) for column, field in zip(columns, schema, strict=True)],

@@ -70,7 +70,7 @@ def sigma_vs_range(errors: np.ndarray, distance: np.ndarray, columns: int = 1) -
     return float(a), float(b)
 
 
-def correlation_time(rho: float, period: float) -> float:
+def _correlation_time(rho: float, period: float) -> float:
     """τ = −Δt / ln ρ [s] of an AR(1) sampled every ``period`` [s] (0 unless 0 < ρ < 1)."""
     return float(-period / np.log(rho)) if 0.0 < rho < 1.0 else 0.0
 
@@ -114,8 +114,8 @@ def fit_box3d(errors: dict[str, np.ndarray], pairs: tuple[np.ndarray, np.ndarray
     a, b = pairs
     depth_normal = errors["depth"] / (depth_a + depth_b * distance)
     size_sigma = fitted["size_sigma"] * (1.0 + distance / distance_scale if distance_scale else 1.0)
-    tau = correlation_time(lag1(depth_normal, a, b), period)
-    size_tau = correlation_time(lag1(errors["size"][:, 0] / size_sigma, a, b), period)
+    tau = _correlation_time(lag1(depth_normal, a, b), period)
+    size_tau = _correlation_time(lag1(errors["size"][:, 0] / size_sigma, a, b), period)
     notes.append(f"correlation times: τ = −Δt/ln ρ from {len(a)} pairs Δt = {period:.3g} s apart")
     flipped = errors["flipped"]
     flip_p = float(flipped.mean())

@@ -143,7 +143,7 @@ def _codes(column, path: Path, name: str) -> np.ndarray:
     return np.unique(np.asarray(column.to_pylist(), dtype=object).astype(str), return_inverse=True)[1].astype(np.int64)
 
 
-def measured_moments(log: EmbeddingLog, seed: int = 0) -> Moments:
+def _measured_moments(log: EmbeddingLog, seed: int = 0) -> Moments:
     """The moments of ``log`` (see the module docstring)."""
     rng = np.random.default_rng(seed)
     camera, identity = within_sequences(log)
@@ -247,7 +247,7 @@ def fit_appearance(log: EmbeddingLog, frame_rate_hz: float = 10.0, *, lookalike_
     given)."""
     if not (np.isfinite(frame_rate_hz) and frame_rate_hz > 0):
         raise SimrigError(f"--frame-rate-hz: must be a positive number, got {frame_rate_hz}")
-    moments = measured_moments(log)
+    moments = _measured_moments(log)
     period = 1.0 / frame_rate_hz
     first_guess = int(np.clip(round(1.0 / max(moments.different_sd**2, 1e-6)), 2, 1024))
     fits: dict[int, AppearanceFit] = {}
@@ -331,9 +331,9 @@ def fit_embeddings_to_toml(path: Path, out: Path, frame_rate_hz: float = 10.0, *
         "occlusion, truncation and range are not in the log: their average effect is in sigma and the drifts, so",
         "occlusion_sigma, truncation_sigma and viewpoint_weight are 0; a scenario extending a preset keeps the",
         "preset's distance_scale_m (noise growing with range on top of the log's average)",
-        f"misfit {fit.misfit:.1f} over {moments_count(m)} moments (sum of squared standardised residuals)",
-        *([] if fit.misfit <= POOR_FIT * moments_count(m) else [
-            f"WARNING: the model does not fit this log well (misfit {fit.misfit / moments_count(m):.0f} per moment;"
+        f"misfit {fit.misfit:.1f} over {_moments_count(m)} moments (sum of squared standardised residuals)",
+        *([] if fit.misfit <= POOR_FIT * _moments_count(m) else [
+            f"WARNING: the model does not fit this log well (misfit {fit.misfit / _moments_count(m):.0f} per moment;"
             " a good fit is near 1): compare the tables above before using these settings"]),
         *([] if fit.settings["slow_drift_time_s"] < MAX_TIME_S else [
             f"slow_drift_time_s is at the schema's bound {MAX_TIME_S:g} s: the log shows no end to the slow drift's "
@@ -359,6 +359,6 @@ def fit_embeddings_to_toml(path: Path, out: Path, frame_rate_hz: float = 10.0, *
                       *lines, "", text, f"written to {out}"])
 
 
-def moments_count(moments: Moments) -> int:
+def _moments_count(moments: Moments) -> int:
     """How many moments the fit matched."""
     return len(moments.gaps) + 2 + (moments.cross_mean is not None)

@@ -2,10 +2,10 @@
 
 **Input.** Detections: the devkit's detection-results JSON (``{"meta": …, "results": {sample_token: [box,
 …]}}``, each box ``translation``, ``size``, ``rotation``, ``velocity``, ``detection_name``,
-``detection_score``), read by :func:`simrig.dataset.tracks_nuscenes.read_results`; boxes of classes simrig
+``detection_score``), read by :func:`simrig.formats.nuscenes.tracks.read_results`; boxes of classes simrig
 has none of (``trailer``, ``construction_vehicle``, ``barrier``, ``traffic_cone``) are left out. Ground truth:
 the folder of the devkit's database tables (or the data root above it), read by
-:func:`simrig.dataset.importing.nuscenes.read_nuscenes_truth` as ``simrig import --format nuscenes`` reads it
+:func:`simrig.formats.nuscenes.ground_truth.read_nuscenes_truth` as ``simrig import --format nuscenes`` reads it
 (an object is its ``instance_token``; boxes without lidar or radar points dropped), or a simrig dataset with 3D
 ground truth (an import of nuScenes keeps its sample tokens; a generated one has ``SCENARIO-seedN-FFFFFF``).
 Only the samples the results JSON has a key for count (a val-split result against trainval tables).
@@ -37,11 +37,13 @@ from pathlib import Path
 
 import numpy as np
 
+from simrig.formats.imported_truth import SourceError
+from simrig.formats.nuscenes.ground_truth import read_nuscenes_truth, table_folder
+from simrig.formats.nuscenes.samples import sample_tokens
+from simrig.formats.nuscenes.tracks import read_results
+
 from ..classes import ActorClass
 from ..dataset import Dataset
-from ..dataset.importing.builder import SourceError
-from ..dataset.importing.nuscenes import read_nuscenes_truth, table_folder
-from ..dataset.tracks_nuscenes import read_results
 from ..errors import DatasetError, SimrigError
 from ..scenarios.evaluation_schema import NUSCENES_CLASS_RANGE_M
 from .estimators import Fit, box_errors, fit_box3d, fit_scores, gilbert_elliott
@@ -68,7 +70,7 @@ class LogTruth:
     boxes: np.ndarray
 
 
-def read_log_truth(path: Path) -> LogTruth:
+def _read_log_truth(path: Path) -> LogTruth:
     """The ground truth at ``path``: nuScenes tables, or a simrig dataset with 3D ground truth."""
     try:
         folder = table_folder(path)
@@ -87,7 +89,7 @@ def read_log_truth(path: Path) -> LogTruth:
         raise SimrigError(f"--truth {str(path)!r}: its ground truth has no 3D boxes (imported from 2D labels)")
     truth = dataset.ground_truth
     index = {int(f): k for k, f in enumerate(truth.frames)}
-    return LogTruth({token: index[f] for token, f in dataset.sample_tokens().items()},
+    return LogTruth({token: index[f] for token, f in sample_tokens(dataset).items()},
                     np.asarray(truth.timestamps, dtype=float),
                     np.array([[e.x, e.y, e.z] for e in truth.egos], dtype=float).reshape(-1, 3),
                     np.array([index[int(f)] for f in truth.frame], dtype=np.int64), truth.actor_id,
@@ -106,7 +108,7 @@ def fit_nuscenes(detections: Path, truth: Path, cameras: int = NUSCENES_CAMERAS)
     ``truth`` (see the module docstring); ``cameras`` divides the per-sample clutter rate."""
     if cameras < 1:
         raise SimrigError(f"--cameras {cameras}: must be at least 1")
-    log = read_log_truth(Path(truth))
+    log = _read_log_truth(Path(truth))
     rows, frames = read_results(Path(detections), tokens=log.tokens, kind="detection", error=SimrigError)
     samples = np.unique(np.asarray(frames, dtype=np.int64))
     if not len(samples):

@@ -24,15 +24,17 @@ from pathlib import Path
 
 import numpy as np
 
+from simrig.scenarios.evaluation_schema import NUSCENES_CLASS_RANGE_M, VEHICLE_CLASS_RANGE_M
+
 from ..causes import Cause, cause_masks
 from ..dataset import Dataset
+from ..dataset.ground_truth import per_label
 from ..dataset.reader import embedding_matrix
 from ..geometry import camera_from_world
 from ..types import BOX3D_FIELDS, EgoPose
 from .nuscenes_metrics import DIST_THRESHOLDS, TP_METRICS, TP_THRESHOLD, accumulate, calc_ap, calc_tp, match_class
 from .reid import EmbeddingLog, ReidRow, format_table, reid_table
 
-CLASS_RANGE_M = {"car": 50.0, "truck": 50.0, "bus": 50.0, "motorcycle": 40.0}
 DISTANCE_BANDS_M = (0.0, 10.0, 20.0, 30.0, 40.0, 50.0)
 VISIBILITY_BANDS = (0.0, 0.4, 0.6, 0.8, 1.0 + 1e-9)
 _STRUCTURAL = int(Cause.OUT_OF_VIEW | Cause.TRUNCATED | Cause.OCCLUDED | Cause.FAR | Cause.SCHEDULED_OCCLUSION
@@ -128,18 +130,18 @@ def measure(path: Path | str) -> Measurement:
     visible = np.where(np.any(in_view & np.isfinite(occlusion), axis=1), visible, np.nan)
     gt_rows = np.array([frame_row[int(f)] for f in gt_frame], dtype=np.int64)
     gt_range = np.hypot(*(gt_boxes[:, :2] - ego_xy[gt_rows]).T) if len(gt_rows) else np.empty(0)
-    gt_limit = np.array([CLASS_RANGE_M.get(name, 50.0) for name in gt_class])
-    gt_keep = in_view.any(axis=1) & (gt_range <= gt_limit)
+    gt_limit = per_label(gt_class, NUSCENES_CLASS_RANGE_M.__getitem__)
+    gt_keep = in_view.any(axis=1) & (gt_range < gt_limit)  # the devkit's filter_eval_boxes: strictly closer
 
     det_frame, det_boxes = _column(detections, "frame"), _boxes(detections)
     det_class = np.asarray(detections.column("label").to_pylist(), dtype=object)
     det_score = _column(detections, "score")
     det_rows = np.array([frame_row[int(f)] for f in det_frame], dtype=np.int64)
     det_range = np.hypot(*(det_boxes[:, :2] - ego_xy[det_rows]).T) if len(det_rows) else np.empty(0)
-    det_keep = det_range <= np.array([CLASS_RANGE_M.get(name, 50.0) for name in det_class])
+    det_keep = det_range < per_label(det_class, NUSCENES_CLASS_RANGE_M.__getitem__)
 
     per_class, gt_hit, det_hit = {}, np.zeros(len(gt_frame), dtype=bool), np.zeros(len(det_frame), dtype=bool)
-    for name in CLASS_RANGE_M:
+    for name in VEHICLE_CLASS_RANGE_M:
         g = np.nonzero(gt_keep & (gt_class == name))[0]
         p = np.nonzero(det_keep & (det_class == name))[0]
         if not len(g):

@@ -36,7 +36,7 @@ def _angle_diff(a: np.ndarray, b: np.ndarray, period: float = 2 * np.pi) -> np.n
     return np.where(diff > np.pi, diff - 2 * np.pi, diff)
 
 
-def scale_iou(gt: np.ndarray, pred: np.ndarray) -> np.ndarray:
+def _scale_iou(gt: np.ndarray, pred: np.ndarray) -> np.ndarray:
     """3D IoU of boxes with aligned centres and yaw from their sizes ``(N, 3)``."""
     intersection = np.prod(np.minimum(gt, pred), axis=-1)
     return intersection / (np.prod(gt, axis=-1) + np.prod(pred, axis=-1) - intersection)
@@ -82,7 +82,7 @@ def match_class(gt_sample: np.ndarray, gt_boxes: np.ndarray, pred_sample: np.nda
     gt, pred = gt_boxes[matched[pairs]], pred_boxes[pairs]
     errors = {
         "trans_err": np.hypot(gt[:, 0] - pred[:, 0], gt[:, 1] - pred[:, 1]),
-        "scale_err": 1.0 - scale_iou(gt[:, [4, 3, 5]], pred[:, [4, 3, 5]]),
+        "scale_err": 1.0 - _scale_iou(gt[:, [4, 3, 5]], pred[:, [4, 3, 5]]),
         "orient_err": np.abs(_angle_diff(gt[:, 6], pred[:, 6])),
         "vel_err": np.hypot(gt[:, 7] - pred[:, 7], gt[:, 8] - pred[:, 8]),
     }

@@ -109,7 +109,7 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out / "explain.json", document)
     table = explain_table(document)
-    write_text_atomic(out / "explain.md", explain_markdown(document, table))
+    write_text_atomic(out / "explain.md", _explain_markdown(document, table))
     with atomic_file(out / "verdicts.parquet") as partial:
         pq.write_table(verdicts["table"], partial)
     plots = tuple(waterfall(document, name, out / f"waterfall-{_file_name(name)}.png") for name in chosen)
@@ -439,7 +439,7 @@ def explain_table(document: dict) -> str:
     return "\n".join(lines)
 
 
-def explain_markdown(document: dict, table: str | None = None) -> str:
+def _explain_markdown(document: dict, table: str | None = None) -> str:
     """``explain.md``: the table in a code block under the command that produced it."""
     table = explain_table(document) if table is None else table
     return (f"### What each cause cost {document['label']}\n\nProduced by `{document['command']}`.\n\n"
@@ -455,6 +455,6 @@ def add_to_run_report(run_dir: Path | str, label: str, document: dict) -> Path:
     path = run_dir / SCORES_DIR / label / REPORT
     text = path.read_text(encoding="utf-8")
     marker = "### What each cause cost"
-    text = text.split(f"\n{marker}")[0].rstrip("\n") + "\n\n" + explain_markdown(document)
+    text = text.split(f"\n{marker}")[0].rstrip("\n") + "\n\n" + _explain_markdown(document)
     write_text_atomic(path, text)
     return write_index(run_dir)

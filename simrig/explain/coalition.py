@@ -68,7 +68,7 @@ class CoalitionResult:
     failure: str = ""
 
 
-def coalition_key(removed: tuple[str, ...]) -> str:
+def _coalition_key(removed: tuple[str, ...]) -> str:
     """A short folder name for a set of removed groups (``actual`` for none).
 
     >>> coalition_key(()), len(coalition_key(("occlusion", "reid")))
@@ -79,12 +79,12 @@ def coalition_key(removed: tuple[str, ...]) -> str:
     return hashlib.sha256(json.dumps(sorted(removed)).encode()).hexdigest()[:16]
 
 
-def counterfactual_dataset(source: Dataset, removed: tuple[str, ...], scratch: Path) -> Dataset:
+def _counterfactual_dataset(source: Dataset, removed: tuple[str, ...], scratch: Path) -> Dataset:
     """The dataset of ``source``'s scenario and seed with ``removed`` groups off (``source`` itself for none),
     from the scratch cache or made there now."""
     if not removed:
         return source
-    out = scratch / coalition_key(removed)
+    out = scratch / _coalition_key(removed)
     try:
         return Dataset.open(out)
     except DatasetError:
@@ -95,14 +95,14 @@ def counterfactual_dataset(source: Dataset, removed: tuple[str, ...], scratch: P
     return Dataset.open(out)
 
 
-def metric_value(report, dimension: str, name: str) -> float:
+def _metric_value(report, dimension: str, name: str) -> float:
     """One overall metric of a score report (NaN when the report has no such dimension or value)."""
     table = report.metrics3d if dimension == "3d" else report.metrics2d
     value = None if table is None else table["overall"].get(name)
     return float("nan") if value is None else float(value)
 
 
-def error_keys(errors) -> frozenset[ErrorKey]:
+def _error_keys(errors) -> frozenset[ErrorKey]:
     """The FN/IDS/FRAG rows of an errors table as matching keys."""
     rows = errors.filter(pc.is_in(errors.column("kind"), value_set=pa.array(KINDS))).select(
         ["dimension", "kind", "actor_id", "frame", "camera"]).to_pydict()
@@ -115,7 +115,7 @@ def evaluate_coalition(task: CoalitionTask) -> tuple[CoalitionResult, ...]:
     (importable by name: the pool and Ray workers call it). A tracker's own fault is its result's ``failure``,
     so that one tracker failing on one counterfactual does not stop the others."""
     source = Dataset.open(task.dataset)
-    dataset = counterfactual_dataset(source, task.removed, Path(task.scratch))
+    dataset = _counterfactual_dataset(source, task.removed, Path(task.scratch))
     results = []
     for run in task.runs:
         try:
@@ -125,6 +125,6 @@ def evaluate_coalition(task: CoalitionTask) -> tuple[CoalitionResult, ...]:
             results.append(CoalitionResult(task.removed, np.full(len(run.metrics), np.nan), None, str(error)))
             continue
         report = score(dataset, tracking.tracks, camera=run.camera)
-        values = np.array([metric_value(report, dimension, name) for dimension, name in run.metrics])
-        results.append(CoalitionResult(task.removed, values, error_keys(report.errors) if run.errors else None))
+        values = np.array([_metric_value(report, dimension, name) for dimension, name in run.metrics])
+        results.append(CoalitionResult(task.removed, values, _error_keys(report.errors) if run.errors else None))
     return tuple(results)

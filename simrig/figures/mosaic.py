@@ -50,7 +50,7 @@ def _frame_tracks(dataset: Dataset, tracks, frame: int):
     """(per camera: [(pixel box, track id)], [(world box, track id)]) of a tracker's rows at ``frame``."""
     if tracks is None:
         return {}, []
-    from simrig.dataset.tracks_formats import dataset_tracks
+    from simrig.formats.tracks import dataset_tracks
 
     rows3d, rows2d = dataset_tracks(dataset, tracks)
     per_camera: dict[str, list] = {}

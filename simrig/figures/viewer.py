@@ -43,7 +43,7 @@ from .mosaic import CLUTTER_COLOUR, identity_colour, track_colour
 INSTALL_HINT = "the viewer needs rerun-sdk: pip install 'simrig[view]' (or pip install rerun-sdk)"
 
 
-def has_display() -> bool:
+def _has_display() -> bool:
     """Whether a viewer window can open here (on Linux: an X11 or Wayland display is set)."""
     return not sys.platform.startswith("linux") or bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
@@ -60,7 +60,7 @@ def _rerun():
     return rerun
 
 
-def run_parts(folder: Path, tracker: str | None = None) -> tuple[Path, Path | None, Path | None]:
+def _run_parts(folder: Path, tracker: str | None = None) -> tuple[Path, Path | None, Path | None]:
     """(dataset folder, tracks folder or None, errors file or None) of a run folder or a dataset folder. A run
     folder (``simrig run``: ``dataset/``, ``tracks/LABEL/``, ``scores/LABEL/errors.parquet``) may hold several
     trackers' runs: ``tracker`` names the LABEL to show (needed only when there are several)."""
@@ -107,10 +107,10 @@ def log_run(folder: Path | str, *, tracker: str | None = None, save: Path | str 
     ``save_option`` names it, inside the dataset or tracks it reads or in a system folder), else to a viewer
     spawned now (``spawn``). Returns ``save``."""
     rr = _rerun()
-    if save is None and spawn and not has_display():
+    if save is None and spawn and not _has_display():
         raise ViewerError("no display to open the rerun viewer on (DISPLAY and WAYLAND_DISPLAY are unset): pass "
                           "--save FILE.rrd and open it with 'rerun FILE.rrd' where there is one")
-    dataset_path, tracks_path, errors_path = run_parts(Path(folder), tracker)
+    dataset_path, tracks_path, errors_path = _run_parts(Path(folder), tracker)
     if save is not None:  # before any work: not inside the dataset or tracks read, not a system folder
         check_output_path(save, what=save_option, inputs=(dataset_path, tracks_path), folder=False)
         if Path(save).is_symlink():  # rerun streams into the file: it would write through the link
@@ -136,7 +136,7 @@ def log_run(folder: Path | str, *, tracker: str | None = None, save: Path | str 
                           static=True)
     rows3d = rows2d = None
     if tracks_path is not None:
-        from simrig.dataset.tracks_formats import dataset_tracks
+        from simrig.formats.tracks import dataset_tracks
 
         rows3d, rows2d = dataset_tracks(dataset, tracks_path)
     detections = dataset.table("detections")

@@ -47,7 +47,7 @@ class PipelineResult:
     label: str
 
 
-def run_label(tracker: str, params: dict | None, camera: str | None) -> str:
+def _run_label(tracker: str, params: dict | None, camera: str | None) -> str:
     """The folder name of a tracker run: the tracker's name (characters other than letters, digits, ``_.-``
     replaced), plus an 8-digit key of its parameters and camera when it has any.
 
@@ -121,7 +121,7 @@ def run_pipeline(
         generate(loaded, seed=seed, out=folder, frames=frames, overwrite=overwrite, progress=progress, images=images)
         generation_s = time.perf_counter() - started
     dataset = Dataset.open(folder)
-    label = run_label(tracker, params, camera)
+    label = _run_label(tracker, params, camera)
     tracking = run_tracker(dataset, tracker, out / TRACKS_DIR / label, params, frame_time_limit_s=frame_time_limit_s)
     _record_tracker(tracking.out, tracker, params, camera)
     report = score(dataset, tracking.tracks, camera=camera)  # scored in memory; the folder is for the user

@@ -94,7 +94,7 @@ class RigScene:
         self.scene.add(pyrender.DirectionalLight(color=np.ones(3), intensity=3.0), pose=_sun_pose())
         self._road_node = None
         if markings is not None:
-            self._road_node = self.scene.add(road_mesh(markings))
+            self._road_node = self.scene.add(_road_mesh(markings))
         self._ego_xy = np.zeros(2)
 
     # ------------------------------------------------------------------ actors
@@ -180,7 +180,7 @@ class RigScene:
         return np.ascontiguousarray(image[..., :3])
 
 
-def road_mesh(markings: RoadMarkings) -> pyrender.Mesh:
+def _road_mesh(markings: RoadMarkings) -> pyrender.Mesh:
     """One static mesh: a grey ground square under the map and every painted segment (:mod:`.road`)."""
     cx, cy = markings.centre
     h = GROUND_HALF_SIZE_M

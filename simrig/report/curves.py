@@ -22,7 +22,7 @@ from .groups import Group  # noqa: E402
 from .load import BenchResults  # noqa: E402
 
 
-def sweep_points(bench: BenchResults, parameter: str) -> pd.DataFrame:
+def _sweep_points(bench: BenchResults, parameter: str) -> pd.DataFrame:
     """The points on ``parameter``'s curves, one per (cell, tracker), with ``x`` = the cell's value of it."""
     column = PARAMETER_PREFIX + parameter
     frame = bench.results
@@ -51,7 +51,7 @@ def colours(trackers: list[str]) -> dict[str, tuple]:
 
 def plot_sweep(bench: BenchResults, parameter: str, groups: list[Group], out: Path) -> Path | None:
     """One figure for ``parameter``: a row per group, a column per curve metric. None if it has no points."""
-    points = sweep_points(bench, parameter)
+    points = _sweep_points(bench, parameter)
     groups = [group for group in groups if (points["scored"] == group.key).any()]
     if not groups:
         return None
@@ -85,7 +85,7 @@ def plot_sweep(bench: BenchResults, parameter: str, groups: list[Group], out: Pa
 def plot_sweep_by_scenario(bench: BenchResults, parameter: str, out: Path) -> Path | None:
     """HOTA against ``parameter``, a panel per scenario: where the mean curve comes from. Camera-scored
     trackers are dashed."""
-    points = sweep_points(bench, parameter)
+    points = _sweep_points(bench, parameter)
     scenarios = list(dict.fromkeys(points["scenario"]))
     if not scenarios:
         return None
@@ -118,7 +118,7 @@ def plot_sweep_by_scenario(bench: BenchResults, parameter: str, out: Path) -> Pa
 
 def curve_table(bench: BenchResults, parameter: str, group: Group, metric: str, name: str) -> list[str]:
     """The numbers behind one curve: rows trackers, columns values of ``parameter`` (mean over seeds)."""
-    points = sweep_points(bench, parameter)
+    points = _sweep_points(bench, parameter)
     lines = curve(points[points["scored"] == group.key], metric)
     if lines.empty:
         return []

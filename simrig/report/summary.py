@@ -11,7 +11,7 @@ from .load import BenchResults
 from .paired import paired_difference
 
 
-def base_rows(bench: BenchResults) -> pd.DataFrame:
+def _base_rows(bench: BenchResults) -> pd.DataFrame:
     """The points at each scenario's own settings (the sweeps' values equal to them included once)."""
     return bench.results[bench.results["sweep"] == ""]
 
@@ -19,7 +19,7 @@ def base_rows(bench: BenchResults) -> pd.DataFrame:
 def tracker_table(bench: BenchResults, group: Group) -> list[str]:
     """Rows: trackers of ``group``; columns: its metrics over the base points (mean over scenarios and seeds;
     counts summed)."""
-    rows = base_rows(bench)
+    rows = _base_rows(bench)
     rows = rows[rows["scored"] == group.key]
     out = []
     for tracker, frame in rows.groupby("tracker", sort=False):
@@ -37,7 +37,7 @@ def paired_table(bench: BenchResults, group: Group) -> list[str]:
     """Rows: every tracker of ``group`` but the first; cells: its paired difference from the first tracker in each
     of the group's curve metrics, over the (scenario, seed) sequences both ran at the base points — the mean
     difference per sequence with its 95 % interval (:mod:`.paired`). Empty with fewer than two trackers."""
-    rows = base_rows(bench)
+    rows = _base_rows(bench)
     rows = rows[rows["scored"] == group.key]
     trackers = list(dict.fromkeys(rows["tracker"]))
     if len(trackers) < 2:
@@ -60,7 +60,7 @@ def paired_table(bench: BenchResults, group: Group) -> list[str]:
 def scenario_table(bench: BenchResults, group: Group) -> list[str]:
     """Rows: scenarios; columns: trackers of ``group``; cells: HOTA (mean over seeds) and identity switches
     (summed over seeds)."""
-    rows = base_rows(bench)
+    rows = _base_rows(bench)
     rows = rows[rows["scored"] == group.key]
     trackers = list(dict.fromkeys(rows["tracker"]))
     out = []

@@ -55,7 +55,7 @@ class AmotaResult:
     best_threshold: float
 
 
-def score_thresholds(seq: BevSequence) -> np.ndarray:
+def _score_thresholds(seq: BevSequence) -> np.ndarray:
     """``(40,)`` score threshold of each recall level in :data:`RECALL_LEVELS` order (NaN: not reached)."""
     if seq.num_gt_dets == 0:
         return np.full(len(RECALL_LEVELS), np.nan)
@@ -78,7 +78,7 @@ def motar(c: ClearCounts3D) -> float:
     return float(max(0.0, 1.0 - (c.ids + c.fp + c.fn - (1.0 - r) * c.gt) / (r * c.gt)))
 
 
-def level_values(c: ClearCounts3D) -> dict[str, float]:
+def _level_values(c: ClearCounts3D) -> dict[str, float]:
     """Every per-level metric of one level's counts."""
     matched = c.tp + c.ids
     return {
@@ -93,7 +93,7 @@ def level_values(c: ClearCounts3D) -> dict[str, float]:
 
 def amota_family(seq: BevSequence) -> AmotaResult:
     """The AMOTA family of one class; all NaN when the class has no ground truth."""
-    thresholds = score_thresholds(seq)
+    thresholds = _score_thresholds(seq)
     cache: dict[float, ClearCounts3D] = {}  # counts only: a long sequence's matches at 40 levels are large
     levels = []
     for recall, threshold in zip(RECALL_LEVELS, thresholds, strict=True):
@@ -109,7 +109,7 @@ def amota_family(seq: BevSequence) -> AmotaResult:
     if seq.num_gt_dets == 0:
         return AmotaResult(metrics, tuple(levels), None, float("nan"))
     reached = [level for level in levels if level.counts is not None]
-    values = [level_values(level.counts) for level in reached]
+    values = [_level_values(level.counts) for level in reached]
     unreached = len(levels) - len(reached)
     motars = [v["MOTAR"] for v in values]
     metrics["AMOTA"] = float(np.sum(np.nan_to_num(motars, nan=0.0)) / len(levels))

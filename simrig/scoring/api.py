@@ -8,12 +8,14 @@ import numpy as np
 import pyarrow as pa
 
 from simrig.dataset.tracks_file import TrackSet
-from simrig.dataset.tracks_formats import read_tracks_as
+from simrig.formats.evaluation import evaluation_of, ignore_rules, ignored_counts, projected_in_range
+from simrig.formats.nuscenes.interpolation import INTERPOLATIONS
+from simrig.formats.nuscenes.samples import sample_tokens, scene_of_frame
+from simrig.formats.tracks import read_tracks_as
 from simrig.scenarios.evaluation_schema import EvaluationConfig
 from simrig.scoring.results import METRICS_2D, METRICS_3D, ScoreReport
 
 from ..dataset import Dataset
-from ..dataset.evaluation import evaluation_of, ignore_rules, ignored_counts, projected_in_range
 from ..dataset.ground_truth import GroundTruth
 from ..errors import TracksError
 from .amota import amota_family, combine_classes
@@ -25,7 +27,6 @@ from .counts import combine
 from .hota import HOTA
 from .identity import Identity
 from .inputs import camera_sequences, class_sequences
-from .interpolation import INTERPOLATIONS
 
 LOOKBACK_S = 1.0
 """[s] an identity switch is also tagged with the causes of this long before it (see attribution)."""
@@ -41,10 +42,10 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     """Score ``tracks`` (a tracks folder or file, or a read :class:`TrackSet`) against ``dataset``.
 
     ``fmt``: the tracks' format — ``simrig``, ``motchallenge``, ``kitti`` or ``nuscenes``
-    (:mod:`simrig.dataset.tracks_formats`); detected from the path when ``None``.
+    (:mod:`simrig.formats.tracks`); detected from the path when ``None``.
 
     In 2D a 3D tracker's boxes are projected into the cameras, those beyond their class range dropped first as
-    the devkit drops far predictions (:func:`~simrig.dataset.evaluation.projected_in_range`). With ``camera``,
+    the devkit drops far predictions (:func:`~simrig.formats.evaluation.projected_in_range`). With ``camera``,
     only that camera is scored, in 2D (a 2D tracker's own boxes there, or a 3D tracker's projected into it)
     against the actors in its view, and the 3D metrics are left out: how a per-camera tracker and one that uses
     the other cameras compare on one camera's ground truth.
@@ -55,7 +56,7 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     scenario's ``[evaluation]`` table (:mod:`simrig.scenarios.evaluation_schema`). ``interpolation``: how the
     gaps inside 3D tracks are filled before the AMOTA family — ``devkit`` (the default: the nuScenes devkit
     1.2.0 as shipped, so the numbers compare with published ones), ``corrected`` or ``none``
-    (:mod:`simrig.scoring.interpolation`).
+    (:mod:`simrig.formats.nuscenes.interpolation`).
     """
     if interpolation not in INTERPOLATIONS:
         raise TracksError(f"--interpolation {interpolation!r}: choose one of {', '.join(INTERPOLATIONS)}")
@@ -68,8 +69,8 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     truth = dataset.ground_truth if truth is None else truth
     if not isinstance(tracks, TrackSet):
         tracks = read_tracks_as(tracks, fmt, frame_count=len(truth.frames), cameras=truth.rig.camera_names,
-                                tokens=dataset.sample_tokens(), classes=config.classes,
-                                scenes=dataset.scene_of_frame())
+                                tokens=sample_tokens(dataset), classes=config.classes,
+                                scenes=scene_of_frame(dataset))
     has_2d_tracks = tracks.tracks2d is not None and len(tracks.tracks2d) > 0
     if not dataset.has_3d and not has_2d_tracks and tracks.tracks3d is not None and len(tracks.tracks3d):
         raise TracksError(f"{tracks.source}: 3D tracks, but dataset {str(dataset.path)!r} holds 2D ground truth "
@@ -112,12 +113,12 @@ def _score_3d(truth: GroundTruth, tracks: TrackSet, lookback: int, interpolation
         result = amota_family(seq)
         per_class[seq.label] = {name: result.metrics[name] for name in METRICS_3D}
         if result.best is not None or seq.num_gt_dets:
-            errors.append(attributor.tag(seq.label, "", "3d", events_3d(seq, result.best)))
+            errors.append(attributor.tag(seq.label, "", "3d", _events_3d(seq, result.best)))
     overall = combine_classes(per_class, METRICS_3D)
     return {"overall": overall, "per_class": per_class}, _concat(errors)
 
 
-def events_3d(seq: BevSequence, best: Accumulation | None) -> ClearEvents:
+def _events_3d(seq: BevSequence, best: Accumulation | None) -> ClearEvents:
     """The misses, switches and fragmentations of an accumulation (everything missed when ``None``)."""
     matched = best.matched if best is not None else np.zeros(0, dtype=np.int64)
     tracked = np.zeros(seq.num_gt_dets, dtype=bool)

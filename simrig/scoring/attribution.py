@@ -23,9 +23,10 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
+from simrig.formats.evaluation import rule_names
+
 from ..causes import CAUSE_NAMES, Cause
 from ..dataset.arrow_columns import shared_strings, string_codes
-from ..dataset.evaluation import rule_names
 from ..dataset.ground_truth import GroundTruth
 from .clear import ClearEvents
 
@@ -81,7 +82,7 @@ class Attributor:
         previous = np.concatenate([none, events.switches[:, 3], np.full(len(events.fragmentations), -1)])
         masks = np.concatenate([fn_masks, np.array(switch_masks + frag_masks, dtype=np.int64)])
         n = len(kinds)
-        causes = (cause_name_lists(masks) if truth.causes_known
+        causes = (_cause_name_lists(masks) if truth.causes_known
                   else pa.array([[UNKNOWN]] * n, type=pa.list_(pa.string())))
         return pa.table({
             "dimension": [dimension] * n, "kind": kinds, "frame": frames.astype(np.int32),
@@ -93,13 +94,13 @@ class Attributor:
     def tag_ignored(self, label: str, camera: str, misses: np.ndarray, rules: np.ndarray) -> pa.Table:
         """Rows of kind ``IGN`` for ignored ground truth no tracker box was matched to (not scored, so no FN):
         ``misses`` ``(n, 2)`` (frame, actor id); causes: the rules that ignored it (``ignored_range``, …) and
-        why the detector did not deliver it. ``rules``: ``(R,)`` :class:`~simrig.dataset.evaluation.IgnoreRule`
+        why the detector did not deliver it. ``rules``: ``(R,)`` :class:`~simrig.formats.evaluation.IgnoreRule`
         bits of this camera."""
         rows = self.truth.rows_of(misses[:, 0], misses[:, 1])
         n = len(rows)
         masks = self.masks[rows] if self.truth.causes_known else np.zeros(n, dtype=np.int64)
-        causes = name_lists(np.column_stack([rules[rows], masks]), lambda rule, mask: (
-            [f"{IGNORED}_{name}" for name in rule_names(rule)] + ([] if mask == 0 else cause_names(mask))))
+        causes = _name_lists(np.column_stack([rules[rows], masks]), lambda rule, mask: (
+            [f"{IGNORED}_{name}" for name in rule_names(rule)] + ([] if mask == 0 else _cause_names(mask))))
         return pa.table({
             "dimension": ["2d"] * n, "kind": [IGNORED_KIND] * n, "frame": misses[:, 0].astype(np.int32),
             "camera": [camera] * n, "class": [label] * n, "actor_id": misses[:, 1].astype(np.int64),
@@ -125,16 +126,16 @@ class Attributor:
         return np.nonzero(self.truth.actor_id == actor)[0]
 
 
-def cause_name_lists(masks: np.ndarray) -> pa.ListArray:
-    """The list<string> column of :func:`cause_names` of each of ``(n,)`` masks, built once per distinct mask.
+def _cause_name_lists(masks: np.ndarray) -> pa.ListArray:
+    """The list<string> column of :func:`_cause_names` of each of ``(n,)`` masks, built once per distinct mask.
 
     >>> cause_name_lists(np.array([0, int(Cause.FAR), 0])).to_pylist()
     [['none'], ['far'], ['none']]
     """
-    return name_lists(np.asarray(masks).reshape(-1, 1), cause_names)
+    return _name_lists(np.asarray(masks).reshape(-1, 1), _cause_names)
 
 
-def name_lists(keys: np.ndarray, names) -> pa.ListArray:
+def _name_lists(keys: np.ndarray, names) -> pa.ListArray:
     """The list<string> column of ``names(*key)`` for each row of ``keys`` ``(n, k)`` (integers), each list
     built once per distinct row (an errors table has a handful of distinct ones in 100,000 rows: no Python list
     per row).
@@ -148,7 +149,7 @@ def name_lists(keys: np.ndarray, names) -> pa.ListArray:
     return lists.take(pa.array(inverse.reshape(-1), type=pa.int64()))
 
 
-def cause_names(mask: int) -> list[str]:
+def _cause_names(mask: int) -> list[str]:
     """Tag names of a mask: cause names in bit order, ``handover``; ``["none"]`` when empty.
 
     >>> cause_names(int(Cause.OCCLUDED | Cause.FAR))

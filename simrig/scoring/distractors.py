@@ -17,7 +17,7 @@ MATCH_IOU = 0.5
 """Minimum IoU of the preprocessing match (TrackEval's, the same as CLEAR's)."""
 
 
-def preprocessing_matches(seq: Sequence) -> np.ndarray:
+def _preprocessing_matches(seq: Sequence) -> np.ndarray:
     """Indices of the pairs of ``seq`` that TrackEval's preprocessing Hungarian matches (IoU ≥ 0.5 − ε)."""
     candidate = seq.pair_similarity >= MATCH_IOU - _EPS
     candidates = np.nonzero(candidate)[0]
@@ -37,7 +37,7 @@ def split_distractors(seq: Sequence, ignored: np.ndarray, removes: np.ndarray | 
     ``removes`` ``(n,)``: the ignored rows whose matched tracker box is removed (default: all of them; a row
     the source does not evaluate keeps its match, a false positive, as TrackEval keeps a box matched to ground
     truth of another class)."""
-    matched = preprocessing_matches(seq)
+    matched = _preprocessing_matches(seq)
     on_ignored = (ignored if removes is None else removes & ignored)[seq.pair_gt[matched]]
     keep_tracker = np.ones(seq.num_tracker_dets, dtype=bool)
     keep_tracker[seq.pair_tracker[matched[on_ignored]]] = False

@@ -2,7 +2,7 @@
 
 2D: one :class:`~simrig.scoring.sequence.Sequence` per (camera, class), or per camera class-agnostic. Ground
 truth: every actor in the camera's view (its clipped silhouette box) that the evaluation region does not ignore
-(:mod:`simrig.dataset.evaluation`). Tracker boxes: the tracker's own 2D rows, or — for a 3D-only tracker — its
+(:mod:`simrig.formats.evaluation`). Tracker boxes: the tracker's own 2D rows, or — for a 3D-only tracker — its
 3D boxes projected through the rig with the ground truth's geometry
 (:func:`simrig.dataset.ground_truth.project_tracks`), so that 3D and 2D trackers are compared on the same
 camera; those matched to an ignored box are removed (TrackEval's preprocessing).
@@ -19,14 +19,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from simrig.dataset.tracks_file import TrackRows
+from simrig.formats.evaluation import KEEPS_MATCHES
+from simrig.formats.nuscenes.interpolation import gaps
 from simrig.scenarios.evaluation_schema import NUSCENES_CLASS_RANGE_M
 
-from ..dataset.evaluation import KEEPS_MATCHES
 from ..dataset.ground_truth import GroundTruth, per_label
 from ..types import ActorClass
 from .bev import BevSequence, bev_sequence
 from .distractors import split_distractors
-from .interpolation import gaps
 from .sequence import Sequence, sequence_from_rows
 
 CLASS_RANGE_M = {ActorClass(name): value for name, value in NUSCENES_CLASS_RANGE_M.items()}
@@ -40,10 +40,10 @@ def camera_sequences(truth: GroundTruth, tracks2d: TrackRows, cameras: tuple[str
     """One sequence per (camera, class) for every camera of the rig (or of ``cameras``) and every class present
     on either side; with ``classes="any"`` one per camera, every class together (label ``any``).
 
-    ``ignored``: ``(R, C)`` :class:`~simrig.dataset.evaluation.IgnoreRule` bits, non-zero where a ground-truth
+    ``ignored``: ``(R, C)`` :class:`~simrig.formats.evaluation.IgnoreRule` bits, non-zero where a ground-truth
     box is ignored; such boxes are removed together with the tracker boxes matched to them, as TrackEval's
     preprocessing does (:mod:`simrig.scoring.distractors`), except that a box ignored only by a rule in
-    :data:`~simrig.dataset.evaluation.KEEPS_MATCHES` leaves its matched tracker box in place."""
+    :data:`~simrig.formats.evaluation.KEEPS_MATCHES` leaves its matched tracker box in place."""
     sequences = []
     for c, camera in enumerate(truth.rig.camera_names):
         if cameras is not None and camera not in cameras:
@@ -81,7 +81,7 @@ def _in_range(truth: GroundTruth, frame: np.ndarray, label: np.ndarray, boxes: n
 
 def class_sequences(truth: GroundTruth, tracks3d: TrackRows, interpolation: str = "none") -> list[BevSequence]:
     """One BEV sequence per class present on either side (within the class range). ``interpolation``: how the
-    gaps inside each ground-truth and tracker track are filled first (:mod:`simrig.scoring.interpolation`;
+    gaps inside each ground-truth and tracker track are filled first (:mod:`simrig.formats.nuscenes.interpolation`;
     ``devkit``: as the nuScenes devkit as shipped)."""
     gt_keep = np.nonzero(_in_range(truth, truth.frame, truth.label, truth.boxes))[0]
     track_keep = np.nonzero(_in_range(truth, tracks3d.frame, tracks3d.label, tracks3d.boxes))[0]
@@ -123,8 +123,8 @@ class _Rows:
     score: np.ndarray
 
     def filled(self, interpolation: str) -> _Rows:
-        """These rows with the gaps of every track filled (:func:`~simrig.scoring.interpolation.gaps`), sorted by
-        frame: a frame's own rows first, then its filled ones in the devkit's order."""
+        """These rows with the gaps of every track filled (:func:`~simrig.formats.nuscenes.interpolation.gaps`),
+        sorted by frame: a frame's own rows first, then its filled ones in the devkit's order."""
         added = gaps(self.frame, self.ident, interpolation)
         joined = _Rows(np.concatenate([self.frame, added.frame]), np.concatenate([self.ident, self.ident[added.right]]),
                        np.concatenate([self.label, self.label[added.right]]),

@@ -23,7 +23,7 @@ METRICS_2D = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDSW", "Frag", "M
 INTERPOLATION_WORDS = {"devkit": "track gaps filled as nuscenes-devkit 1.2.0 does",
                        "corrected": "track gaps filled linearly", "none": "track gaps not filled"}
 """How the 3D heading of :meth:`ScoreReport.table` names each ``interpolation``
-(:mod:`simrig.scoring.interpolation`)."""
+(:mod:`simrig.formats.nuscenes.interpolation`)."""
 IGNORED_COLUMNS = ("boxes", "ignored", "range", "height", "visibility", "truncation", "source", "unevaluated",
                    "delivered")
 """Per camera: ground-truth boxes in view, how many are ignored, and by each rule (a box may break several;

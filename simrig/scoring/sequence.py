@@ -125,7 +125,7 @@ def frame_slices(row_frames: np.ndarray, frames: np.ndarray) -> np.ndarray:
     ])
 
 
-def same_frame_pairs(gt_slices: np.ndarray, tracker_slices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _same_frame_pairs(gt_slices: np.ndarray, tracker_slices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Every (ground-truth row, tracker row) pair that shares a frame, frame by frame, gt-major.
 
     >>> same_frame_pairs(np.array([[0, 2], [2, 3]]), np.array([[0, 1], [1, 3]]))
@@ -147,7 +147,7 @@ never held together, only those kept."""
 
 
 def kept_pairs(gt_slices: np.ndarray, tracker_slices: np.ndarray, measure) -> tuple[np.ndarray, ...]:
-    """The same-frame pairs that ``measure`` keeps, in :func:`same_frame_pairs` order, with their values.
+    """The same-frame pairs that ``measure`` keeps, in :func:`_same_frame_pairs` order, with their values.
 
     ``measure(pair_gt, pair_tracker) -> (kept, values)``: of candidate pairs (row indices), the positions of
     those to keep (increasing) and one value each. Candidates are formed :data:`FRAMES_PER_BLOCK` frames at a
@@ -160,7 +160,7 @@ def kept_pairs(gt_slices: np.ndarray, tracker_slices: np.ndarray, measure) -> tu
     """
     parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     for start in range(0, max(len(gt_slices), 1), FRAMES_PER_BLOCK):
-        pair_gt, pair_tracker = same_frame_pairs(gt_slices[start:start + FRAMES_PER_BLOCK],
+        pair_gt, pair_tracker = _same_frame_pairs(gt_slices[start:start + FRAMES_PER_BLOCK],
                                                  tracker_slices[start:start + FRAMES_PER_BLOCK])
         kept, values = measure(pair_gt, pair_tracker)
         parts.append((pair_gt[kept], pair_tracker[kept], values))

@@ -52,7 +52,7 @@ def _cell(value) -> str | None:
     return None if value is None else json.dumps(value)
 
 
-def best_so_far(space: SearchSpace, evaluations: list[Evaluation]) -> np.ndarray:
+def _best_so_far(space: SearchSpace, evaluations: list[Evaluation]) -> np.ndarray:
     """The best mean objective after each evaluation (NaN until the first finite one)."""
     values = np.array([Estimate.of(e.values(space.config.objective.metric)).mean for e in evaluations])
     better = np.fmax if space.config.objective.direction == "maximize" else np.fmin
@@ -67,7 +67,7 @@ def _plot(space: SearchSpace, streams: dict[str, list[Evaluation]], path: Path, 
 
     figure, axis = plt.subplots(figsize=(6.4, 3.6), dpi=100)
     for stream, items in streams.items():
-        curve = best_so_far(space, items)
+        curve = _best_so_far(space, items)
         axis.step(np.arange(1, len(curve) + 1), curve, where="post", label=stream)
     axis.set_xlabel("evaluation")
     axis.set_ylabel(f"best {space.config.objective.metric} so far")
@@ -97,7 +97,7 @@ def write_report(space: SearchSpace, evaluations: dict[str, list[Evaluation]], f
         lines.append(f"A failing case: mean `{objective.failure_metric}` {relation}.")
     lines += ["", f"## Best objective so far ({sampler} against random sampling at the same budget)", "",
               f"![best objective so far]({PLOT})", ""]
-    curves = {s: best_so_far(space, items) for s, items in streams.items()}
+    curves = {s: _best_so_far(space, items) for s, items in streams.items()}
     marks = sorted({n for n in (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, config.budget) if n <= config.budget})
     lines += table(["evaluations", *curves], [[str(n), *(_shown(c[n - 1]) if n <= len(c) else "(stopped)"
                                                          for c in curves.values())] for n in marks], first_left=False)

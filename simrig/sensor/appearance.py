@@ -63,7 +63,7 @@ def roc_auc(positive: np.ndarray, negative: np.ndarray) -> float:
     return float((ranks[:n_pos].sum() - n_pos * (n_pos + 1) / 2) / (n_pos * n_neg))
 
 
-def viewed_side(boxes3d: np.ndarray, camera_centre: np.ndarray) -> np.ndarray:
+def _viewed_side(boxes3d: np.ndarray, camera_centre: np.ndarray) -> np.ndarray:
     """Which side of each box the camera sees: 0 back, 1 side, 2 front (from the bearing of the camera's ray
     relative to the box's yaw); ``camera_centre`` ``(3,)``, or ``(K, 3)``: one per box."""
     ray = boxes3d[:, :2] - camera_centre[..., :2]
@@ -218,7 +218,7 @@ class Embeddings:
         embeddings = np.full((len(batch.cameras), n, d), np.float32(np.nan), dtype=np.float32)
         cameras, actors = np.nonzero(batch.detected)
         if len(actors):
-            sides = viewed_side(batch.boxes3d[actors], batch.world_from_camera[cameras, :3, 3])
+            sides = _viewed_side(batch.boxes3d[actors], batch.world_from_camera[cameras, :3, 3])
             appearance = self.appearance(batch.actor_ids[actors], batch.classes[actors], sides)
             disturbance = noise[cameras, actors] * sigma[cameras, actors, None]
             if drift is not None:

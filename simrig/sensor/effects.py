@@ -147,11 +147,11 @@ class Box2DNoise(_Random):
         size = np.stack([boxes[..., 2] - boxes[..., 0], boxes[..., 3] - boxes[..., 1]], axis=-1)[..., [0, 1, 0, 1]]
         sigma = (self.config.relative_sigma if self.enabled else 0.0) * size * batch.noise_factor[..., None]
         noisy = boxes + noise * sigma
-        inside = ordered_in_image(noisy, batch.image_width[:, None, None], batch.image_height[:, None, None])
+        inside = _ordered_in_image(noisy, batch.image_width[:, None, None], batch.image_height[:, None, None])
         batch.det_boxes2d = np.where(batch.detected[..., None], inside, np.nan)
 
 
-def ordered_in_image(boxes: np.ndarray, width, height) -> np.ndarray:
+def _ordered_in_image(boxes: np.ndarray, width, height) -> np.ndarray:
     """Pixel boxes ``(…, 4)`` with each pair of edges ordered and clipped to the image, ``width`` × ``height``
     [px] (broadcast against the boxes' leading axes)."""
     x = np.sort(boxes[..., [0, 2]], axis=-1).clip(0.0, width)
@@ -391,7 +391,7 @@ class Duplicates(_Random):
             moved = boxes + edges[hit] * c.relative_sigma * size
             boxes3d = batch.det_boxes3d[index][hit].copy()
             boxes3d[:, :2] += offsets[hit] * c.offset_sigma_m
-            batch.add_false_positives(index, ordered_in_image(moved, camera.width, camera.height), boxes3d,
+            batch.add_false_positives(index, _ordered_in_image(moved, camera.width, camera.height), boxes3d,
                                       batch.scores[index][hit] * c.score_factor, batch.labels[index][hit],
                                       batch.embeddings[index][hit], Cause.DUPLICATE)
 

@@ -36,7 +36,7 @@ DETECTOR_GROUPS: tuple[str, ...] = ("occlusion", "truncation", "far_range", "ran
 """The detector's own cause groups, in reporting order (scheduled windows follow them)."""
 
 
-def window_groups(scenario: Scenario) -> tuple[str, ...]:
+def _window_groups(scenario: Scenario) -> tuple[str, ...]:
     """One group per scheduled sensor perturbation, named ``KIND#INDEX`` (its index in ``perturbations``,
     the name its events carry in a dataset's frames table)."""
     return tuple(f"{config.kind}#{index}" for index, config in enumerate(scenario.perturbations)
@@ -45,7 +45,7 @@ def window_groups(scenario: Scenario) -> tuple[str, ...]:
 
 def all_groups(scenario: Scenario) -> tuple[str, ...]:
     """Every group that can be removed from ``scenario``'s detector (present or not)."""
-    return DETECTOR_GROUPS + window_groups(scenario)
+    return DETECTOR_GROUPS + _window_groups(scenario)
 
 
 def present_groups(scenario: Scenario, camera_count: int, scored_in_3d: bool = True) -> tuple[str, ...]:
@@ -69,7 +69,7 @@ def present_groups(scenario: Scenario, camera_count: int, scored_in_3d: bool = T
         "duplicates": s.duplicates.probability > 0,
         "cross_camera": camera_count > 1 and scored_in_3d,
     }
-    return tuple(name for name in DETECTOR_GROUPS if present[name]) + window_groups(scenario)
+    return tuple(name for name in DETECTOR_GROUPS if present[name]) + _window_groups(scenario)
 
 
 def check_groups(names, scenario: Scenario) -> frozenset[str]:

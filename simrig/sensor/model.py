@@ -132,7 +132,7 @@ class SensorModel:
         for effect in self.effects:
             effect.apply(batch)
         if self.cross_camera:
-            keep_best_camera(batch)
+            _keep_best_camera(batch)
         for effect in self.finishing:
             effect.apply(batch)
         dropped = any(drop.dropped(state.frame) for drop in self.drops)
@@ -154,7 +154,7 @@ class SeenUnhindered:
             batch.truncation = np.where(batch.in_view, 0.0, batch.truncation)
 
 
-def keep_best_camera(batch: SensorBatch) -> None:
+def _keep_best_camera(batch: SensorBatch) -> None:
     """Counterfactual ``cross_camera``: an actor detected by several cameras stays detected only in the best
     one — largest visible fraction × (1 − truncation), then largest true pixel box, then rig order."""
     if not len(batch):

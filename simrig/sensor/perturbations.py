@@ -99,7 +99,7 @@ class CameraBlackout(Scheduled):
         cameras = self.applies(batch)
         if cameras is None:
             return
-        silence(batch, cameras, Cause.BLACKOUT)
+        _silence(batch, cameras, Cause.BLACKOUT)
 
 
 class DroppedFrames(Scheduled):
@@ -118,7 +118,7 @@ class DroppedFrames(Scheduled):
     def apply(self, batch: SensorBatch) -> None:
         if not self.dropped(batch.context.frame):
             return
-        silence(batch, self._camera_mask[:, None], Cause.DROPPED_FRAME)
+        _silence(batch, self._camera_mask[:, None], Cause.DROPPED_FRAME)
 
 
 class CalibrationError(Scheduled):
@@ -144,7 +144,7 @@ class IncreasedNoise(Scheduled):
         batch.causes |= np.where(cameras & batch.in_view, int(Cause.NOISE), 0)
 
 
-def silence(batch: SensorBatch, cameras: np.ndarray, cause: Cause) -> None:
+def _silence(batch: SensorBatch, cameras: np.ndarray, cause: Cause) -> None:
     """The ``cameras`` (a ``(C, 1)`` mask) report nothing: p = 0, ``cause`` on every actor in their view."""
     batch.silenced = batch.silenced | cameras[:, 0]
     batch.probability = np.where(cameras, 0.0, batch.probability)

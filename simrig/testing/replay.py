@@ -40,7 +40,7 @@ class Replay:
     scores: dict
 
 
-def headline(report: ScoreReport) -> dict:
+def _headline(report: ScoreReport) -> dict:
     """The overall metrics a replay is compared on: ``{"2d": {...}, "3d": {...}}`` without NaN."""
     out = {}
     for key, metrics in (("2d", report.metrics2d), ("3d", report.metrics3d)):
@@ -62,7 +62,7 @@ def write_replay(path: Path | str, scenario: Scenario, seed: int, *, tracker: st
     if failure:
         document["failure"] = failure[:4000]
     document["params"] = {k: v for k, v in (params or {}).items() if v is not None}
-    document["scores"] = headline(scores) if scores is not None else {}
+    document["scores"] = _headline(scores) if scores is not None else {}
     document["scenario"] = scenario.model_dump(mode="json", exclude_none=True, exclude_unset=True)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -161,7 +161,7 @@ def replay(path: Path | str, *, tracker: str | None = None, params: dict | None 
         dataset = Dataset.open(generate(loaded.scenario, seed=loaded.seed, out=root / "dataset", overwrite=True).path)
         run = run_tracker(dataset, name, root / "tracks", loaded.params if params is None else params)
         report = score(dataset, run.tracks, camera=loaded.camera)
-    now = headline(report)
+    now = _headline(report)
     differences = {}
     for dimension, metrics in loaded.scores.items():
         for metric, value in metrics.items():

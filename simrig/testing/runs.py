@@ -67,7 +67,7 @@ def dataset_for(scenario: Scenario, seed: int = 0, frames: int | None = None) ->
     return _CACHE[key]
 
 
-def tracker_spec(tracker) -> str | None:
+def _tracker_spec(tracker) -> str | None:
     """A string that names ``tracker`` for ``simrig replay``: itself if a string, else ``module:qualname`` of a
     class or function (``None`` when it has none, e.g. a lambda or an instance of a local class)."""
     if isinstance(tracker, str):
@@ -85,7 +85,7 @@ def run_tracker(tracker, scenario: Scenario, *, seed: int = 0, params: dict | No
     a factory or class (called with ``params``), or a tracker object — over it and return the scores
     (``camera``: one camera only, as ``simrig score --camera``)."""
     dataset = dataset_for(scenario, seed, frames)
-    spec = tracker_spec(tracker)
+    spec = _tracker_spec(tracker)
     run = Run(scenario, seed, spec, dict(params or {}))
     _RUNS.append(run)
     outcome = run_on_dataset(dataset, tracker, None, params)

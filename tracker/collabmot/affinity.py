@@ -45,7 +45,7 @@ def position_cost(relp: int, ego_sides: np.ndarray, remote_sides: np.ndarray) ->
     return np.where(ruled_out, np.inf, 0.0)
 
 
-def cosine_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def _cosine_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(N, M) 1 − cos of every pair of rows."""
     a = a / np.maximum(np.linalg.norm(a, axis=1, keepdims=True), 1e-12)
     b = b / np.maximum(np.linalg.norm(b, axis=1, keepdims=True), 1e-12)
@@ -59,7 +59,7 @@ def appearance_cost(ego: list[Tracklet], remote: list[Tracklet], limit: float) -
     rows = [i for i, t in enumerate(ego) if t.feature is not None]
     cols = [j for j, t in enumerate(remote) if t.feature is not None]
     if rows and cols:
-        distance = cosine_distances(np.stack([ego[i].feature for i in rows]),
+        distance = _cosine_distances(np.stack([ego[i].feature for i in rows]),
                                     np.stack([remote[j].feature for j in cols]))
         cost[np.ix_(rows, cols)] = np.where(distance > limit, np.inf, distance)
     return cost

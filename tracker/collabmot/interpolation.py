@@ -18,7 +18,7 @@ from ..boxes2d import iou, occlusion_ratios
 from .tracklets import Tracklet
 
 
-def linear_boxes(box1: np.ndarray, frame1: int, box2: np.ndarray, frame2: int, frames: np.ndarray) -> np.ndarray:
+def _linear_boxes(box1: np.ndarray, frame1: int, box2: np.ndarray, frame2: int, frames: np.ndarray) -> np.ndarray:
     """Eq. 7: b(t) = b₁ + (b₂ − b₁)/(t₂ − t₁)·(t − t₁) for each of ``frames`` → (len(frames), 4) [px].
 
     >>> linear_boxes(np.array([0, 0, 10, 10]), 0, np.array([10, 0, 20, 10]), 4, np.array([1, 2])).tolist()
@@ -46,12 +46,12 @@ def fill_gap(lost: Tracklet, current: Tracklet, *, depth: int, iou_limit: float,
     t1, t2 = before[0], after[-1]
     check = [f for f in before if f > t1] + [f for f in after if f < t2]
     if check:
-        boxes = linear_boxes(lost.boxes[t1], t1, current.boxes[t2], t2, np.array(check))
+        boxes = _linear_boxes(lost.boxes[t1], t1, current.boxes[t2], t2, np.array(check))
         own = np.stack([lost.boxes[f] if f in lost.boxes else current.boxes[f] for f in check])
         if not np.all(np.diag(iou(boxes, own)) > iou_limit):
             return {}
     gap = np.arange(last + 1, first)
-    boxes = linear_boxes(lost.boxes[t1], t1, current.boxes[t2], t2, gap)
+    boxes = _linear_boxes(lost.boxes[t1], t1, current.boxes[t2], t2, gap)
     out = {}
     for frame, box in zip(gap.tolist(), boxes, strict=True):
         others = others_at(frame)

@@ -20,7 +20,7 @@ from ..boxes2d import iou
 from .tracklets import NO_ID, Tracklet
 
 
-def co_appearances(a: Tracklet, b: Tracklet, merged_iou: float) -> tuple[int, int]:
+def _co_appearances(a: Tracklet, b: Tracklet, merged_iou: float) -> tuple[int, int]:
     """(overlapping, apart): the frames where both have a box, split by IoU > ``merged_iou``."""
     common = sorted(set(a.boxes) & set(b.boxes))
     if not common:
@@ -44,7 +44,7 @@ def resurface(present: list[Tracklet], *, merged_iou: float, coappearance_limit:
         members.sort(key=lambda t: (t.first, t.local_id))
         oldest, newer = members[0], members[1:]
         if len(newer) == 1:
-            overlapping, apart = co_appearances(oldest, newer[0], merged_iou)
+            overlapping, apart = _co_appearances(oldest, newer[0], merged_iou)
             if apart == 0 and overlapping < coappearance_limit:
                 continue  # kept: the output merges their boxes
         for tracklet in newer:

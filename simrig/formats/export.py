@@ -13,12 +13,9 @@ import json
 import shutil
 from pathlib import Path
 
-from simrig.dataset.tracks_file import TrackSet, read_tracks
-
-from ..dataset import Dataset
-from ..dataset.evaluation import evaluation_of, ignore_rules, projected_in_range
-from ..dataset.manifest import write_json_atomic
-from ..dataset.outputs import (
+from simrig.dataset import Dataset
+from simrig.dataset.manifest import write_json_atomic
+from simrig.dataset.outputs import (
     PARTIAL_MARKER,
     check_output_path,
     make_partial,
@@ -26,16 +23,21 @@ from ..dataset.outputs import (
     publish,
     remove_stale_partials,
 )
-from ..reading import read_capped
-from . import kitti, motchallenge, nuscenes
-from .input import ExportError, ExportInput
+from simrig.dataset.tracks_file import TrackSet, read_tracks
+from simrig.formats import OUTSIDE_FORMATS
+from simrig.formats.evaluation import evaluation_of, ignore_rules, projected_in_range
+from simrig.formats.export_input import ExportError, ExportInput
+from simrig.formats.kitti import writer as kitti_writer
+from simrig.formats.motchallenge import writer as motchallenge_writer
+from simrig.formats.nuscenes import writer as nuscenes_writer
+from simrig.reading import read_capped
 
 
 def _formats():
-    return {"motchallenge": motchallenge.write, "kitti": kitti.write, "nuscenes": nuscenes.write}
+    return {"motchallenge": motchallenge_writer.write, "kitti": kitti_writer.write, "nuscenes": nuscenes_writer.write}
 
 
-FORMATS = ("motchallenge", "kitti", "nuscenes")
+FORMATS = OUTSIDE_FORMATS
 WRITTEN_BY = "simrig export"
 MARKER = "simrig-export.json"
 """The file that marks a folder as written by ``simrig export`` (the only kind ``--overwrite`` replaces)."""

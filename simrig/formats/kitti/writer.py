@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .input import ExportInput
+from simrig.formats.export_input import ExportInput
 
 KITTI_TYPE = {"car": "Car", "truck": "Truck", "bus": "Misc", "motorcycle": "Cyclist", "pedestrian": "Pedestrian",
               "bicycle": "Cyclist"}
@@ -50,7 +50,7 @@ def _keyed(table, camera: str, frame: np.ndarray, actor: np.ndarray, column: str
     return np.where(keys[position] == wanted, values[position], missing)
 
 
-def camera_boxes(truth, rows: np.ndarray, c: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _camera_boxes(truth, rows: np.ndarray, c: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(dimensions h, w, l; bottom-centre location in camera ``c``'s frame; rotation_y) of ground-truth rows."""
     camera = truth.rig.cameras[c]
     boxes = truth.boxes[rows]
@@ -83,7 +83,7 @@ def write(data: ExportInput, out: Path) -> None:
         occluded = np.where(np.isnan(occlusion), 3, np.digitize(np.nan_to_num(occlusion), [0.1, 0.5]))
         truncation_level = np.digitize(truncated, TRUNCATION_LEVELS, right=True)
         if data.dataset.has_3d:
-            dimensions, location, rotation = camera_boxes(truth, rows, c)
+            dimensions, location, rotation = _camera_boxes(truth, rows, c)
             alpha = _wrap(rotation - np.arctan2(location[:, 0], location[:, 2]))
         else:  # imported 2D boxes: KITTI's "unknown" 3D values
             dimensions, location = np.full((len(rows), 3), -1.0), np.full((len(rows), 3), -1000.0)

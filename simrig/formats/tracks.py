@@ -1,6 +1,7 @@
-"""Tracks in any of the formats ``simrig score`` reads: simrig Parquet (:mod:`.tracks_file`), MOTChallenge text
-(:mod:`.tracks_motchallenge`), KITTI tracking labels (:mod:`.tracks_kitti`) and nuScenes tracking-results JSON
-(:mod:`.tracks_nuscenes`), named or detected from the path:
+"""Tracks in any of the formats ``simrig score`` reads: simrig Parquet (:mod:`simrig.dataset.tracks_file`),
+MOTChallenge text (:mod:`simrig.formats.motchallenge.tracks`), KITTI tracking labels
+(:mod:`simrig.formats.kitti.tracks`) and nuScenes tracking-results JSON (:mod:`simrig.formats.nuscenes.tracks`),
+named or detected from the path:
 
 - a ``.json`` file → nuScenes; a ``.parquet`` file, or a folder with ``tracks3d.parquet`` / ``tracks2d.parquet``
   → simrig;
@@ -15,16 +16,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from simrig.dataset.ground_truth import project_tracks
+from simrig.dataset.tracks_file import TRACKS2D_FILE, TRACKS3D_FILE, TrackRows, TrackSet, read_tracks, tracks_in_memory
 from simrig.errors import TracksError
+from simrig.formats import OUTSIDE_FORMATS
+from simrig.formats.kitti.tracks import read_kitti
+from simrig.formats.motchallenge.tracks import read_motchallenge
+from simrig.formats.nuscenes.samples import sample_tokens, scene_of_frame
+from simrig.formats.nuscenes.tracks import read_nuscenes
 from simrig.reading import check_regular, open_regular
 
-from .ground_truth import project_tracks
-from .tracks_file import TRACKS2D_FILE, TRACKS3D_FILE, TrackRows, TrackSet, read_tracks, tracks_in_memory
-from .tracks_kitti import read_kitti
-from .tracks_motchallenge import read_motchallenge
-from .tracks_nuscenes import read_nuscenes
-
-FORMATS = ("simrig", "motchallenge", "kitti", "nuscenes")
+FORMATS = ("simrig", *OUTSIDE_FORMATS)
 
 
 def detect_format(path: Path, cameras: tuple[str, ...]) -> str:
@@ -93,7 +95,7 @@ def dataset_tracks(dataset, path: Path | str, fmt: str | None = None) -> tuple[T
     are read as class-agnostic."""
     truth = dataset.ground_truth
     tracks = read_tracks_as(path, fmt, frame_count=len(truth.frames), cameras=truth.rig.camera_names,
-                            tokens=dataset.sample_tokens(), classes="any", scenes=dataset.scene_of_frame())
+                            tokens=sample_tokens(dataset), classes="any", scenes=scene_of_frame(dataset))
     if tracks.tracks3d is None or (tracks.tracks2d is not None and len(tracks.tracks2d)):
         return tracks.tracks3d, tracks.tracks2d
     return tracks.tracks3d, project_tracks(truth, tracks.tracks3d)

@@ -17,7 +17,7 @@ evaluation runs on the export as it is::
                  "v1.0-simrig", "OUT").main()
 
 and ``simrig import --format nuscenes OUT`` reads it back. The devkit interpolates across gaps in a track, which
-simrig's scorer does not (:mod:`simrig.dataset.importing.nuscenes`): on tracks without gaps the two agree.
+simrig's scorer does not (:mod:`simrig.formats.nuscenes.ground_truth`): on tracks without gaps the two agree.
 
 **Results JSON** (``ground_truth.json`` and ``NAME.json``):
 
@@ -36,9 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
-from simrig.dataset.tracks_nuscenes import sample_token
-
-from .input import ExportError, ExportInput
+from simrig.formats.export_input import ExportError, ExportInput
+from simrig.formats.nuscenes.samples import sample_token
 
 META = {"use_camera": True, "use_lidar": False, "use_radar": False, "use_map": False, "use_external": False}
 VERSION, SPLIT = "v1.0-simrig", "simrig"

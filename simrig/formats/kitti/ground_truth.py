@@ -4,14 +4,14 @@ Where the label files are: ``SRC/CAMERA/label_02/0000.txt`` (``simrig export --f
 the camera), ``SRC/label_02/NNNN.txt`` or a ``label_02`` folder itself (KITTI's layout: each sequence a camera
 named by its number), or one ``.txt`` file. A line is ``frame track_id type truncated occluded alpha left top
 right bottom height width length x y z rotation_y [score]`` (space-separated, 0-based frames, pixel boxes); every
-line of a file has as many fields as its first, 17 or 18 (:mod:`simrig.dataset.tracks_kitti` reads tracker files
+line of a file has as many fields as its first, 17 or 18 (:mod:`simrig.formats.kitti.tracks` reads tracker files
 the same way).
 
 Only the pixel box is imported (the 3D fields are in a KITTI camera frame whose calibration the labels do not
 carry). Types map to classes as the KITTI tracks reader maps them — ``Car`` → car, ``Truck`` → truck, ``Misc`` →
 bus, ``Cyclist`` → motorcycle (``simrig export`` writes a motorcycle as ``Cyclist``), ``Pedestrian`` →
 pedestrian — so that ground truth and a tracker's files in the same format meet in the same class. Marked as not
-scored (:attr:`~simrig.dataset.evaluation.IgnoreRule.SOURCE`, as KITTI's benchmark treats them): ``Van`` (class
+scored (:attr:`~simrig.formats.evaluation.IgnoreRule.SOURCE`, as KITTI's benchmark treats them): ``Van`` (class
 car) and ``Person_sitting`` (class pedestrian), KITTI's distractors of those classes, and every ``DontCare``
 region — once for each class of its sequence, since a region applies to every class. simrig removes the tracker
 boxes matched (IoU ≥ 0.5) to such a box, where TrackEval's KITTI reader removes those mostly inside a
@@ -22,8 +22,8 @@ Other types (``Tram``, ``Misc`` aside) and rows with id −1 other than ``DontCa
 
 Image size: the sequence's first image (``image_02/NNNN/000000.png`` beside ``label_02``) when present, else
 KITTI's 1242 × 375 px, enlarged to hold every box. Frame rate: 10 Hz (KITTI's). Object ids are per sequence:
-actor id = sequence number × :data:`~.builder.ID_STRIDE` + id; ``DontCare`` regions get ids from
-:data:`~.builder.ID_STRIDE` / 2 up.
+actor id = sequence number × :data:`~simrig.formats.imported_truth.ID_STRIDE` + id; ``DontCare`` regions get ids from
+:data:`~simrig.formats.imported_truth.ID_STRIDE` / 2 up.
 """
 
 from __future__ import annotations
@@ -32,10 +32,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ...types import Rig
-from ..tracks_kitti import CLASS_OF_TYPE, FIELDS, GROUND_TRUTH_FOLDER
-from ..tracks_motchallenge import integer, number, parse_lines
-from .builder import ID_STRIDE, MAX_IMPORTED_FRAMES, ImportedTruth, SourceError, check_unique, uncalibrated_camera
+from simrig.formats.imported_truth import (
+    ID_STRIDE,
+    MAX_IMPORTED_FRAMES,
+    ImportedTruth,
+    SourceError,
+    check_unique,
+    uncalibrated_camera,
+)
+from simrig.formats.kitti.tracks import CLASS_OF_TYPE, FIELDS, GROUND_TRUTH_FOLDER
+from simrig.formats.text_rows import integer, number, parse_lines
+from simrig.types import Rig
 
 FRAME_RATE_HZ = 10.0
 KITTI_IMAGE_SIZE = (1242, 375)

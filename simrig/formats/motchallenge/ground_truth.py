@@ -22,20 +22,20 @@ scored:
   of class ``pedestrian``;
 - the distractor classes — 2 ``person_on_vehicle``, 7 ``static_person``, 8 ``distractor``, 12 ``reflection``
   (and 6 ``non_mot_vehicle`` in a ``MOT20`` benchmark) — whatever their ``consider`` flag: boxes marked as not
-  scored (:attr:`~simrig.dataset.evaluation.IgnoreRule.SOURCE`): a tracker box matched to one (Hungarian on
+  scored (:attr:`~simrig.formats.evaluation.IgnoreRule.SOURCE`): a tracker box matched to one (Hungarian on
   IoU ≥ 0.5) is removed, and the box is no miss;
 - every other row (other classes — cars, occluders … — and pedestrians whose ``consider``, read as an integer
   as TrackEval reads it, is 0): boxes marked as ground truth the benchmark does not evaluate
-  (:attr:`~simrig.dataset.evaluation.IgnoreRule.UNEVALUATED`): they take part in the match above like every
+  (:attr:`~simrig.formats.evaluation.IgnoreRule.UNEVALUATED`): they take part in the match above like every
   box, so they can take a tracker box away from a distractor, but a tracker box matched to one is kept (a
   false positive), and the box is no miss — TrackEval's rule exactly.
 
 A sequence named ``CAMERA-CLASS`` with a simrig class (``simrig export``'s layout, one sequence per camera and
 class) becomes rows of that class in camera ``CAMERA``; any other sequence is a camera of its own name. The
 MOTChallenge visibility column is not kept (TrackEval does not use it; a box with visibility 0 is scored).
-Object ids are per sequence: actor id = sequence number × :data:`~.builder.ID_STRIDE` + the sequence's id. The dataset
-scores class-agnostic (``classes = "any"``, MOTChallenge's protocol) unless every sequence names its class, and
-ignores nothing but the source's distractors.
+Object ids are per sequence: actor id = sequence number × :data:`~simrig.formats.imported_truth.ID_STRIDE` +
+the sequence's id. The dataset scores class-agnostic (``classes = "any"``, MOTChallenge's protocol) unless every
+sequence names its class, and ignores nothing but the source's distractors.
 """
 
 from __future__ import annotations
@@ -45,11 +45,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ...reading import read_capped
-from ...types import ActorClass, Rig
-from ..tracks_file import CLASSES
-from ..tracks_motchallenge import ANY, integer, number, parse_lines
-from .builder import ID_STRIDE, MAX_IMPORTED_FRAMES, ImportedTruth, SourceError, check_unique, uncalibrated_camera
+from simrig.dataset.tracks_file import CLASSES
+from simrig.formats.imported_truth import (
+    ID_STRIDE,
+    MAX_IMPORTED_FRAMES,
+    ImportedTruth,
+    SourceError,
+    check_unique,
+    uncalibrated_camera,
+)
+from simrig.formats.motchallenge.tracks import ANY
+from simrig.formats.text_rows import integer, number, parse_lines
+from simrig.reading import read_capped
+from simrig.types import ActorClass, Rig
 
 PEDESTRIAN_CLASS = 1
 CLASS_NAMES = {1: "pedestrian", 2: "person_on_vehicle", 3: "car", 4: "bicycle", 5: "motorbike", 6: "non_mot_vehicle",
@@ -66,7 +74,7 @@ IMPORT_EVALUATION = {"ignore": True, "min_height_px": 0.0, "min_visible_fraction
 """The imported dataset's ``[evaluation]``: only the source's own marks (range has no effect without 3D)."""
 
 
-def sequence_folders(src: Path) -> tuple[str, list[Path]]:
+def _sequence_folders(src: Path) -> tuple[str, list[Path]]:
     """(benchmark name, the sequence folders) at ``src`` (see the module docstring's layouts)."""
     if (src / "gt" / "gt.txt").is_file():
         return src.parent.name, [src]
@@ -113,7 +121,7 @@ def _seqinfo(folder: Path) -> dict:
     return info
 
 
-def camera_and_label(name: str) -> tuple[str, str | None]:
+def _camera_and_label(name: str) -> tuple[str, str | None]:
     """(camera, class or ``None``) of a sequence name: ``CAMERA-CLASS`` with a simrig class, else the name."""
     camera, _, label = name.rpartition("-")
     if camera and label in CLASSES:
@@ -123,7 +131,7 @@ def camera_and_label(name: str) -> tuple[str, str | None]:
     return name, None
 
 
-def read_sequence(folder: Path, distractors: tuple[int, ...]) -> dict:
+def _read_sequence(folder: Path, distractors: tuple[int, ...]) -> dict:
     """The rows of one sequence's ``gt/gt.txt``: frame (0-based), id, box, what the source marks it as (0: scored
     ground truth, :data:`DISTRACTOR`, :data:`UNEVALUATED`) and why."""
     file = folder / "gt" / "gt.txt"
@@ -153,14 +161,14 @@ def read_sequence(folder: Path, distractors: tuple[int, ...]) -> dict:
 
 def read_motchallenge_truth(src: Path) -> ImportedTruth:
     """The ground truth of the MOTChallenge sequences at ``src`` (see the module docstring)."""
-    benchmark, folders = sequence_folders(src)
+    benchmark, folders = _sequence_folders(src)
     distractors = MOT20_DISTRACTOR_CLASSES if benchmark.upper().startswith("MOT20") else DISTRACTOR_CLASSES
     cameras: dict[str, tuple[int, int]] = {}
     columns: dict[str, list] = {key: [] for key in ("frame", "actor", "camera", "label", "box", "mark", "reason")}
     lengths, rates, named = [], [], True
     for number_, folder in enumerate(folders):
         info = _seqinfo(folder)
-        sequence = read_sequence(folder, distractors)
+        sequence = _read_sequence(folder, distractors)
         rows = sequence["rows"]
         last = max((r[0] for r in rows), default=-1) + 1
         length = int(info.get("seqLength", last))
@@ -168,7 +176,7 @@ def read_motchallenge_truth(src: Path) -> ImportedTruth:
             raise SourceError(f"{sequence['file']}: frame {last} is beyond the sequence's seqLength {length}")
         lengths.append(length)
         rates.append(info.get("frameRate", DEFAULT_FRAME_RATE_HZ))
-        camera, label = camera_and_label(folder.name)
+        camera, label = _camera_and_label(folder.name)
         named &= label is not None
         extent = np.array([[r[4], r[5]] for r in rows]).reshape(-1, 2).max(axis=0, initial=1.0)
         size = (int(info.get("imWidth", np.ceil(extent[0]))), int(info.get("imHeight", np.ceil(extent[1]))))

@@ -20,20 +20,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pyarrow as pa
 
+from simrig.dataset.tracks_file import CLASSES, TRACKS2D_FILE, TRACKS2D_SCHEMA, rows_table
 from simrig.errors import TracksError
-from simrig.reading import open_regular
-
-from .tracks_file import CLASSES, TRACKS2D_FILE, TRACKS2D_SCHEMA, _table
+from simrig.formats.text_rows import integer, number, parse_lines
 
 MIN_COLUMNS = 7
 COLUMN_NAMES = ("frame", "id", "left", "top", "width", "height", "conf")
 ANY = "any"
 
 
-def result_files(path: Path) -> list[Path]:
+def _result_files(path: Path) -> list[Path]:
     """The per-camera ``.txt`` files at ``path`` (a file, a folder of them, or an export folder)."""
     if path.is_file():
         return [path]
@@ -52,7 +50,7 @@ def result_files(path: Path) -> list[Path]:
     return files
 
 
-def camera_and_class(file: Path, cameras: tuple[str, ...]) -> tuple[str, str]:
+def _camera_and_class(file: Path, cameras: tuple[str, ...]) -> tuple[str, str]:
     """(camera, class or ``any``) of a file named ``CAMERA.txt`` or ``CAMERA-CLASS.txt``."""
     stem = file.stem
     if stem in cameras:
@@ -64,56 +62,12 @@ def camera_and_class(file: Path, cameras: tuple[str, ...]) -> tuple[str, str]:
                       f"({', '.join(cameras)}) and a class ({', '.join(CLASSES)}, or {ANY})")
 
 
-def parse_lines(file: Path, separator: str | None, minimum: int, names: tuple[str, ...]) -> list[tuple[int, list[str]]]:
-    """The non-empty lines of ``file`` as (line number, fields), each with the first line's field count."""
-    try:
-        with open_regular(file, "tracks file", TracksError) as handle:
-            text = handle.read().decode("utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        raise TracksError(f"{file}: cannot be read as text ({error})") from None
-    lines, expected = [], None
-    for number, line in enumerate(text.splitlines(), start=1):
-        if not line.strip():
-            continue
-        fields = [f.strip() for f in line.split(separator)] if separator else line.split()
-        if expected is None:
-            expected = len(fields)
-            if expected < minimum:
-                raise TracksError(f"{file}:{number}: {expected} columns where at least {minimum} are expected "
-                                  f"({', '.join(names)}, …)")
-        elif len(fields) != expected:
-            raise TracksError(f"{file}:{number}: {len(fields)} columns where {expected} are expected (as on the "
-                              "file's first line)")
-        lines.append((number, fields))
-    return lines
-
-
-def number(file: Path, line: int, fields: list[str], column: int, names: tuple[str, ...]) -> float:
-    """Field ``column`` as a finite float; an error naming file, line and column otherwise."""
-    try:
-        value = float(fields[column])
-    except ValueError:
-        value = float("nan")
-    if not np.isfinite(value):
-        raise TracksError(f"{file}:{line}: column {column + 1} ({names[column]}) is {fields[column]!r}, "
-                          "not a finite number")
-    return value
-
-
-def integer(file: Path, line: int, fields: list[str], column: int, names: tuple[str, ...]) -> int:
-    value = number(file, line, fields, column, names)
-    if value != int(value):
-        raise TracksError(f"{file}:{line}: column {column + 1} ({names[column]}) is {fields[column]!r}, "
-                          "not an integer")
-    return int(value)
-
-
 def read_motchallenge(path: Path, *, frame_count: int, cameras: tuple[str, ...], classes: str) -> dict[str, pa.Table]:
     """The 2D tracks table of the MOTChallenge files at ``path`` (``classes``: the evaluation's ``classes``
     setting; rows of a file without a class in its name need ``any``)."""
     rows = []
-    for file in result_files(path):
-        camera, label = camera_and_class(file, cameras)
+    for file in _result_files(path):
+        camera, label = _camera_and_class(file, cameras)
         if label == ANY:
             if classes != ANY:
                 raise TracksError(f"{file}: MOTChallenge rows carry no class; name the file {camera}-CLASS.txt or "
@@ -129,5 +83,5 @@ def read_motchallenge(path: Path, *, frame_count: int, cameras: tuple[str, ...],
             if width <= 0 or height <= 0:
                 raise TracksError(f"{file}:{line}: box width {fields[4]} and height {fields[5]} must be positive")
             rows.append((frame, camera, track, label, conf, left, top, left + width, top + height))
-    return {TRACKS2D_FILE: _table(rows, TRACKS2D_SCHEMA)}
+    return {TRACKS2D_FILE: rows_table(rows, TRACKS2D_SCHEMA)}
 

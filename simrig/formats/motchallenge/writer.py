@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..dataset.evaluation import KEEPS_MATCHES
-from .input import ExportInput
+from simrig.formats.evaluation import KEEPS_MATCHES
+from simrig.formats.export_input import ExportInput
 
 BENCHMARK, SPLIT = "SIMRIG", "test"
 EVALUATED_CLASS, DISTRACTOR_CLASS = 1, 8

@@ -1,7 +1,8 @@
 """One imported dataset, whatever its source: ground truth as flat arrays, written with the dataset writer.
 
-Every format (:mod:`.motchallenge`, :mod:`.kitti`, :mod:`.nuscenes`) turns its files into an
-:class:`ImportedTruth` and hands it to :func:`write_imported`, which writes the same seven tables a generated
+Every format's ``ground_truth`` module (:mod:`simrig.formats.motchallenge`, :mod:`simrig.formats.kitti`,
+:mod:`simrig.formats.nuscenes`) turns its files into an :class:`ImportedTruth` and hands it to
+:func:`write_imported`, which writes the same seven tables a generated
 dataset has through :class:`~simrig.dataset.writer.DatasetWriter` (partial folder, manifest last, published by
 one rename: an interrupted import leaves nothing that looks complete). What the source lacks is marked, not
 invented:
@@ -16,7 +17,7 @@ invented:
 
 Boxes the source marks as not scored are in ``source_ignored.parquet`` (``frame, actor_id, camera, kind,
 reason``): ``kind`` ``distractor`` (distractor classes, ``DontCare``; read as the
-:attr:`~simrig.dataset.evaluation.IgnoreRule.SOURCE` rule: a tracker box matched to one is removed) or
+:attr:`~simrig.formats.evaluation.IgnoreRule.SOURCE` rule: a tracker box matched to one is removed) or
 ``unevaluated`` (ground truth the benchmark does not evaluate; the ``UNEVALUATED`` rule: a tracker box matched
 to one stays a false positive).
 """
@@ -30,12 +31,12 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from ...errors import DatasetError, SimrigError
-from ...rig import rig_to_dict
-from ...types import Camera, Rig
-from ..ground_truth import SOURCE_KINDS
-from ..manifest import package_versions
-from ..writer import DatasetWriter
+from simrig.dataset.ground_truth import SOURCE_KINDS
+from simrig.dataset.manifest import package_versions
+from simrig.dataset.writer import DatasetWriter
+from simrig.errors import DatasetError, SimrigError
+from simrig.rig import rig_to_dict
+from simrig.types import Camera, Rig
 
 ID_STRIDE = 1_000_000_000
 """Actor id = sequence number × this + the sequence's own id (MOTChallenge and KITTI ids are per sequence)."""

@@ -40,9 +40,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...reading import open_regular
-from ...types import Rig
-from .builder import ImportedTruth, SourceError
+from simrig.formats.imported_truth import ImportedTruth, SourceError
+from simrig.reading import open_regular
+from simrig.types import Rig
 
 TABLES = ("scene", "sample", "sample_data", "ego_pose", "calibrated_sensor", "sensor", "sample_annotation",
           "instance", "category")

@@ -19,10 +19,9 @@ from pathlib import Path
 
 import pyarrow as pa
 
+from simrig.dataset.tracks_file import TRACKS2D_FILE, TRACKS2D_SCHEMA, rows_table
 from simrig.errors import TracksError
-
-from .tracks_file import TRACKS2D_FILE, TRACKS2D_SCHEMA, _table
-from .tracks_motchallenge import integer, number, parse_lines
+from simrig.formats.text_rows import integer, number, parse_lines
 
 FIELDS = ("frame", "track_id", "type", "truncated", "occluded", "alpha", "left", "top", "right", "bottom",
           "height", "width", "length", "x", "y", "z", "rotation_y", "score")
@@ -75,4 +74,4 @@ def read_kitti(path: Path, *, frame_count: int, cameras: tuple[str, ...]) -> dic
                                   "bottom > top)")
             score = values.get(17, 1.0)
             rows.append((frame, camera, track, label, score, left, top, right, bottom))
-    return {TRACKS2D_FILE: _table(rows, TRACKS2D_SCHEMA)}
+    return {TRACKS2D_FILE: rows_table(rows, TRACKS2D_SCHEMA)}

@@ -10,12 +10,11 @@ import enum
 import numpy as np
 from pydantic import ValidationError
 
+from simrig.dataset.ground_truth import SOURCE_KINDS, GroundTruth, per_label, project_tracks
+from simrig.dataset.tracks_file import TrackRows
+from simrig.errors import SimrigError
 from simrig.scenarios import describe_errors
 from simrig.scenarios.evaluation_schema import EvaluationConfig
-
-from ..errors import SimrigError
-from .ground_truth import SOURCE_KINDS, GroundTruth, per_label, project_tracks
-from .tracks_file import TrackRows
 
 
 class EvaluationError(SimrigError):
@@ -35,7 +34,7 @@ class IgnoreRule(enum.IntFlag):
     """More of it is outside the image than the maximum truncation."""
     SOURCE = enum.auto()
     """The source of an imported dataset marks it as a distractor (a MOTChallenge distractor class, a KITTI
-    ``DontCare`` region or ``Van``/``Person_sitting`` box: see :mod:`simrig.dataset.importing`): a tracker box
+    ``DontCare`` region or ``Van``/``Person_sitting`` box: see :mod:`simrig.formats.importing`): a tracker box
     matched to it is removed."""
     UNEVALUATED = enum.auto()
     """The source has it as ground truth that its benchmark does not evaluate (MOTChallenge: a class other than

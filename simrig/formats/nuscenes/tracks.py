@@ -5,11 +5,11 @@
 ``velocity`` (vx, vy [m/s]), ``tracking_id`` (a string), ``tracking_name``, ``tracking_score``. A
 detection-results JSON (read by :func:`read_results` for ``simrig detector fit``) has ``detection_name`` and
 ``detection_score`` instead and no id. A dataset's sample tokens are ``SCENARIO-seedN-FFFFFF``
-(:func:`sample_token`, as ``simrig export --format nuscenes`` writes them). Track ids that are all integers are
-kept; otherwise each distinct id gets a number in sorted order; on a dataset of several scenes (a nuScenes
-import) an id names one track per scene, as in the devkit, and every (scene, id) gets its own number. Boxes
-whose ``tracking_name`` is not a simrig class (``trailer`` …) are left out. Errors name the file and the line of
-the sample token in it.
+(:func:`~simrig.formats.nuscenes.samples.sample_token`, as ``simrig export --format nuscenes`` writes them).
+Track ids that are all integers are kept; otherwise each distinct id gets a number in sorted order; on a
+dataset of several scenes (a nuScenes import) an id names one track per scene, as in the devkit, and every
+(scene, id) gets its own number. Boxes whose ``tracking_name`` is not a simrig class (``trailer`` …) are left
+out. Errors name the file and the line of the sample token in it.
 """
 
 from __future__ import annotations
@@ -21,19 +21,13 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
+from simrig.dataset.tracks_file import CLASSES, TRACKS3D_FILE, TRACKS3D_SCHEMA, rows_table
 from simrig.errors import SimrigError, TracksError
 from simrig.reading import read_capped
-
-from .tracks_file import CLASSES, TRACKS3D_FILE, TRACKS3D_SCHEMA, _table
 
 MAX_RESULTS_BYTES = 2 * 2**30
 """[bytes] the largest results JSON read (nuScenes' full validation results are about 1 GB)."""
 BOX_KEYS = ("translation", "size", "rotation", "velocity", "tracking_id", "tracking_name", "tracking_score")
-
-
-def sample_token(scenario: str, seed: int, frame: int) -> str:
-    """The nuScenes sample token of a dataset's frame."""
-    return f"{scenario}-seed{seed}-{int(frame):06d}"
 
 
 def _line_of(text: str, needle: str) -> int:
@@ -116,11 +110,11 @@ def read_nuscenes(path: Path, *, tokens: dict[str, int], scenes: np.ndarray | No
         keys = [(int(scenes[b[0]]), b[1]) for b in boxes]
         number = {key: k for k, key in enumerate(sorted(set(keys)))}
         rows = [(b[0], number[key], *b[2:]) for b, key in zip(boxes, keys, strict=True)]
-        return {TRACKS3D_FILE: _table(rows, TRACKS3D_SCHEMA)}
+        return {TRACKS3D_FILE: rows_table(rows, TRACKS3D_SCHEMA)}
     names = sorted({b[1] for b in boxes})
     try:
         number = {name: int(name) for name in names}
     except ValueError:
         number = {name: k for k, name in enumerate(names)}
     rows = [(b[0], number[b[1]], *b[2:]) for b in boxes]
-    return {TRACKS3D_FILE: _table(rows, TRACKS3D_SCHEMA)}
+    return {TRACKS3D_FILE: rows_table(rows, TRACKS3D_SCHEMA)}

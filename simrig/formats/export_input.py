@@ -6,12 +6,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simrig.dataset import Dataset
+from simrig.dataset.ground_truth import GroundTruth
 from simrig.dataset.tracks_file import TrackRows
+from simrig.errors import SimrigError
 from simrig.scenarios.evaluation_schema import EvaluationConfig
-
-from ..dataset import Dataset
-from ..dataset.ground_truth import GroundTruth
-from ..errors import SimrigError
 
 
 class ExportError(SimrigError):
@@ -20,7 +19,7 @@ class ExportError(SimrigError):
 
 @dataclass(frozen=True, eq=False)
 class ExportInput:
-    """What every format gets: the dataset, its ground truth, the :class:`~simrig.dataset.evaluation.IgnoreRule`
+    """What every format gets: the dataset, its ground truth, the :class:`~simrig.formats.evaluation.IgnoreRule`
     bits of every box ``(R, C)`` (what ``simrig score`` ignores with the same settings), and the tracker's rows
     (``None`` without ``--tracks``): ``rows2d`` as the scorer compares them, ``rows3d`` when the tracker gave 3D
     boxes."""
