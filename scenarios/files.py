@@ -18,19 +18,25 @@ if TYPE_CHECKING:
     from pydantic import BaseModel
 
 
-def catalog_entry_or_file(name_or_path: str | Path, entries: dict[str, Path]) -> Path | None:
-    """The catalog entry called ``name_or_path`` (a bare name), else that path if something is there, else None.
+def catalog_entry_or_file(name_or_path: str | Path, entries: dict[str, Path], what: str,
+                          error: type[Exception]) -> Path:
+    """The catalog entry called ``name_or_path`` (a bare name), else that path if something is there; else
+    ``error`` naming ``what`` (``suite``, ``search space``) and the catalog's entries.
 
-    >>> catalog_entry_or_file("smoke", {"smoke": Path("suites/smoke.toml")})
+    >>> catalog_entry_or_file("smoke", {"smoke": Path("suites/smoke.toml")}, "suite", ValueError)
     PosixPath('suites/smoke.toml')
-    >>> catalog_entry_or_file("no/such/file.toml", {}) is None
-    True
+    >>> catalog_entry_or_file("no/such/file.toml", {"smoke": Path("smoke.toml")}, "suite", ValueError)
+    Traceback (most recent call last):
+    ...
+    ValueError: unknown suite 'no/such/file.toml': not a named suite (smoke) nor a .toml file
     """
     text = str(name_or_path)
     if text in entries and not Path(text).suffix:
         return entries[text]
     path = Path(text)
-    return path if path.exists() else None
+    if not path.exists():
+        raise error(f"unknown {what} {text!r}: not a named {what} ({', '.join(entries)}) nor a .toml file")
+    return path
 
 
 def read_toml(path: Path, what: str, error: type[Exception]) -> dict[str, Any]:

@@ -149,12 +149,7 @@ class Suite(Strict):
 
 
 def _path(name_or_path: str | Path) -> Path:
-    entries = suite_catalog()
-    path = catalog_entry_or_file(name_or_path, entries)
-    if path is None:
-        raise SuiteError(f"unknown suite {str(name_or_path)!r}: not a named suite ({', '.join(entries)}) nor a "
-                         ".toml file")
-    return path
+    return catalog_entry_or_file(name_or_path, suite_catalog(), "suite", SuiteError)
 
 
 def load_suite(name_or_path: str | Path, *, trust_file: bool = False) -> tuple[Suite, dict[str, Scenario]]:

@@ -78,12 +78,7 @@ def _extremes(dimension: Dimension) -> list[Candidate]:
 
 
 def _path(name_or_path: str | Path) -> Path:
-    entries = space_catalog()
-    path = catalog_entry_or_file(name_or_path, entries)
-    if path is None:
-        raise SearchError(f"unknown search space {str(name_or_path)!r}: not a catalog space ({', '.join(entries)}) "
-                          "nor a .toml file")
-    return path
+    return catalog_entry_or_file(name_or_path, space_catalog(), "search space", SearchError)
 
 
 def load_space(name_or_path: str | Path, *, tracker: str | None = None, params: dict | None = None,
