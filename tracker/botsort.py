@@ -67,7 +67,7 @@ def _rotation_homographies(rig: Rig, before: EgoPose, now: EgoPose) -> np.ndarra
 def _local_affine(homography: np.ndarray, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
     """(A (2, 2), t (2,)): the affine map that agrees with ``homography`` at (x, y) to first order.
 
-    >>> a, t = local_affine(np.array([[1.0, 0, 5], [0, 1, -2], [0, 0, 1]]), 10.0, 20.0)
+    >>> a, t = _local_affine(np.array([[1.0, 0, 5], [0, 1, -2], [0, 0, 1]]), 10.0, 20.0)
     >>> a.tolist(), t.tolist()
     ([[1.0, 0.0], [0.0, 1.0]], [5.0, -2.0])
     """

@@ -51,7 +51,7 @@ units)."""
 def _centre_distance(projected: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     """(N, M) distance between box centres over the projected box's diagonal [-].
 
-    >>> centre_distance(np.array([[0.0, 0.0, 30.0, 40.0]]), np.array([[10.0, 0.0, 40.0, 40.0]])).tolist()
+    >>> _centre_distance(np.array([[0.0, 0.0, 30.0, 40.0]]), np.array([[10.0, 0.0, 40.0, 40.0]])).tolist()
     [[0.2]]
     """
     pc = (projected[:, None, :2] + projected[:, None, 2:]) / 2

@@ -71,7 +71,7 @@ class CoalitionResult:
 def _coalition_key(removed: tuple[str, ...]) -> str:
     """A short folder name for a set of removed groups (``actual`` for none).
 
-    >>> coalition_key(()), len(coalition_key(("occlusion", "reid")))
+    >>> _coalition_key(()), len(_coalition_key(("occlusion", "reid")))
     ('actual', 16)
     """
     if not removed:

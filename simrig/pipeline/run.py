@@ -51,7 +51,7 @@ def _run_label(tracker: str, params: dict | None, camera: str | None) -> str:
     """The folder name of a tracker run: the tracker's name (characters other than letters, digits, ``_.-``
     replaced), plus an 8-digit key of its parameters and camera when it has any.
 
-    >>> run_label("saga", None, None), run_label("saga", {"gate": 4}, None) == run_label("saga", {"gate": 4}, None)
+    >>> _run_label("saga", None, None), _run_label("saga", {"gate": 4}, None) == _run_label("saga", {"gate": 4}, None)
     ('saga', True)
     """
     name = re.sub(r"[^\w.-]", "_", tracker)

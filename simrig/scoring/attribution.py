@@ -129,7 +129,7 @@ class Attributor:
 def _cause_name_lists(masks: np.ndarray) -> pa.ListArray:
     """The list<string> column of :func:`_cause_names` of each of ``(n,)`` masks, built once per distinct mask.
 
-    >>> cause_name_lists(np.array([0, int(Cause.FAR), 0])).to_pylist()
+    >>> _cause_name_lists(np.array([0, int(Cause.FAR), 0])).to_pylist()
     [['none'], ['far'], ['none']]
     """
     return _name_lists(np.asarray(masks).reshape(-1, 1), _cause_names)
@@ -140,7 +140,7 @@ def _name_lists(keys: np.ndarray, names) -> pa.ListArray:
     built once per distinct row (an errors table has a handful of distinct ones in 100,000 rows: no Python list
     per row).
 
-    >>> name_lists(np.array([[1, 0], [2, 3], [1, 0]]), lambda a, b: [str(a)] * b or ["-"]).to_pylist()
+    >>> _name_lists(np.array([[1, 0], [2, 3], [1, 0]]), lambda a, b: [str(a)] * b or ["-"]).to_pylist()
     [['-'], ['2', '2', '2'], ['-']]
     """
     keys = np.asarray(keys, dtype=np.int64)
@@ -152,9 +152,9 @@ def _name_lists(keys: np.ndarray, names) -> pa.ListArray:
 def _cause_names(mask: int) -> list[str]:
     """Tag names of a mask: cause names in bit order, ``handover``; ``["none"]`` when empty.
 
-    >>> cause_names(int(Cause.OCCLUDED | Cause.FAR))
+    >>> _cause_names(int(Cause.OCCLUDED | Cause.FAR))
     ['occluded', 'far']
-    >>> cause_names(0)
+    >>> _cause_names(0)
     ['none']
     """
     names = [name for name, cause in zip(CAUSE_NAMES, Cause, strict=True) if mask & int(cause)]

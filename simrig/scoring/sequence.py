@@ -128,7 +128,7 @@ def frame_slices(row_frames: np.ndarray, frames: np.ndarray) -> np.ndarray:
 def _same_frame_pairs(gt_slices: np.ndarray, tracker_slices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Every (ground-truth row, tracker row) pair that shares a frame, frame by frame, gt-major.
 
-    >>> same_frame_pairs(np.array([[0, 2], [2, 3]]), np.array([[0, 1], [1, 3]]))
+    >>> _same_frame_pairs(np.array([[0, 2], [2, 3]]), np.array([[0, 1], [1, 3]]))
     (array([0, 1, 2, 2]), array([0, 0, 1, 2]))
     """
     n_gt = gt_slices[:, 1] - gt_slices[:, 0]

@@ -21,7 +21,7 @@ from .tracklets import Tracklet
 def _linear_boxes(box1: np.ndarray, frame1: int, box2: np.ndarray, frame2: int, frames: np.ndarray) -> np.ndarray:
     """Eq. 7: b(t) = b₁ + (b₂ − b₁)/(t₂ − t₁)·(t − t₁) for each of ``frames`` → (len(frames), 4) [px].
 
-    >>> linear_boxes(np.array([0, 0, 10, 10]), 0, np.array([10, 0, 20, 10]), 4, np.array([1, 2])).tolist()
+    >>> _linear_boxes(np.array([0, 0, 10, 10]), 0, np.array([10, 0, 20, 10]), 4, np.array([1, 2])).tolist()
     [[2.5, 0.0, 12.5, 10.0], [5.0, 0.0, 15.0, 10.0]]
     """
     step = (np.asarray(box2, dtype=float) - np.asarray(box1, dtype=float)) / (frame2 - frame1)
