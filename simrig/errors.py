@@ -15,3 +15,7 @@ class DatasetExistsError(DatasetError):
 
 class TracksError(SimrigError):
     """A tracks file is missing, malformed, or does not fit the dataset it is scored against."""
+
+
+class RenderPlatformError(SimrigError):
+    """No offscreen OpenGL context could be made for rendering (the message names ``PYOPENGL_PLATFORM``)."""

@@ -41,7 +41,9 @@ def check_output_path(path: Path | str, *, what: str, inputs: Iterable[Path | st
     """Refuse ``path`` (named ``what``, e.g. ``--out``) as an output; returns it unchanged when it may be written.
 
     ``inputs`` are the paths the command reads (``None`` entries are skipped); ``folder`` says whether the
-    output is a folder (an existing file there is refused) or a file (an existing folder there is refused)."""
+    output is a folder (an existing file there is refused) or a file (an existing folder there is refused).
+    The nearest existing folder above ``path`` must be writable: every output is written beside its place and
+    renamed into it, so a read-only working folder is refused before any work."""
     path = Path(path)
     resolved = path.resolve()
     if resolved == Path(resolved.anchor):
@@ -55,6 +57,9 @@ def check_output_path(path: Path | str, *, what: str, inputs: Iterable[Path | st
         if parent.exists():
             if not parent.is_dir():
                 raise OutputPathError(f"{what} {str(path)!r} is under {str(parent)!r}, which is a file")
+            if not os.access(parent, os.W_OK | os.X_OK):  # before any work: the output is made beside its place
+                raise OutputPathError(f"{what} {str(path)!r}: cannot write in {str(parent)!r} (a read-only file "
+                                      "system, or no permission); choose a folder you can write to")
             break
     if resolved.exists():
         if folder and not resolved.is_dir():

@@ -125,6 +125,14 @@ class Dataset:
         (e.g. a mosaic written by ``simrig render``), sorted, relative to the folder."""
         return self.files.verify()
 
+    @property
+    def identity(self) -> dict:
+        """What tracks made on this dataset record of it (:func:`~simrig.dataset.tracks_file.write_tracks`):
+        scenario name, seed and the SHA-256 of its ground-truth table. Tracks are scored only on a dataset with
+        the same ground truth."""
+        return {"scenario": self.scenario["name"], "seed": self.seed,
+                "ground_truth_sha256": self.manifest["files"]["ground_truth"]["sha256"]}
+
     @cached_property
     def files(self) -> ManifestFiles:
         """The folder's files as the manifest lists them, each checked against its SHA-256 before use."""

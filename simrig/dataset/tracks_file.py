@@ -18,6 +18,7 @@ outside the dataset, an empty box, and a track id used twice in one frame (per c
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,6 +35,8 @@ from simrig.types import BOX2D_FIELDS, BOX3D_FIELDS, ActorClass, Track
 from .arrow_columns import shared_strings
 from .outputs import atomic_file
 
+MADE_ON_KEY = b"simrig.made_on"
+"""The Parquet metadata key of a tracks table that holds the identity (JSON) of the dataset it was made on."""
 TRACKS3D_FILE = "tracks3d.parquet"
 TRACKS2D_FILE = "tracks2d.parquet"
 _KEYS3D = ("frame", "track_id", "class", "score")
@@ -78,11 +81,14 @@ class TrackRows:
 
 @dataclass(frozen=True, eq=False)
 class TrackSet:
-    """What a tracker produced: 3D rows, 2D rows, or both; ``source`` is the path they were read from."""
+    """What a tracker produced: 3D rows, 2D rows, or both; ``source`` is the path they were read from;
+    ``made_on``: the :attr:`~simrig.dataset.Dataset.identity` of the dataset they were made on, when simrig
+    recorded it (tracks simrig wrote; ``None`` for other tools' files)."""
 
     source: str
     tracks3d: TrackRows | None
     tracks2d: TrackRows | None
+    made_on: dict | None = None
 
 
 class TrackTables:
@@ -140,9 +146,12 @@ def _track_tables(frames: Iterable[tuple[int, Iterable[Track]]]) -> dict[str, pa
     return builder.tables()
 
 
-def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]] | dict[str, pa.Table]) -> Path:
+def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]] | dict[str, pa.Table], *,
+                 made_on: dict | None = None) -> Path:
     """Write ``(frame, tracks)`` pairs (or the tables :func:`_track_tables` made of them) to the folder ``out``.
-    Files are written to a temporary name and renamed, so an interrupted write leaves no partial table."""
+    Files are written to a temporary name and renamed, so an interrupted write leaves no partial table.
+    ``made_on``: the identity of the dataset the tracks were made on, kept in each table's metadata
+    (:data:`MADE_ON_KEY`) so that scoring them on another dataset is refused."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tables = frames if isinstance(frames, dict) else _track_tables(frames)
@@ -150,18 +159,31 @@ def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]] 
         if name not in tables and (out / name).exists():
             (out / name).unlink()  # a stale table from an earlier run must not be scored with this one
     for name, table in tables.items():
+        if made_on is not None:
+            metadata = {**(table.schema.metadata or {}), MADE_ON_KEY: json.dumps(made_on, sort_keys=True).encode()}
+            table = table.replace_schema_metadata(metadata)
         with atomic_file(out / name) as partial:
             pq.write_table(table, partial)
     return out
 
 
+def _made_on(schema: pa.Schema) -> dict | None:
+    """The dataset identity a tracks table's metadata records, or ``None`` (none recorded, or unreadable)."""
+    try:
+        value = json.loads((schema.metadata or {}).get(MADE_ON_KEY, b"null"))
+    except ValueError:
+        return None
+    return value if isinstance(value, dict) else None
+
+
 def tracks_in_memory(tables: dict[str, pa.Table], *, frame_count: int, cameras: tuple[str, ...],
-                     source: str = "tracker output") -> TrackSet:
+                     source: str = "tracker output", made_on: dict | None = None) -> TrackSet:
     """A validated :class:`TrackSet` of :func:`_track_tables`' tables, without a round trip through files:
     the same checks as :func:`read_tracks`, errors naming ``source``."""
     rows = {name: _rows(f"{source} ({name})", table.column_names, table.column, name, frame_count, cameras)
             for name, table in tables.items()}
-    return TrackSet(source=source, tracks3d=rows.get(TRACKS3D_FILE), tracks2d=rows.get(TRACKS2D_FILE))
+    return TrackSet(source=source, tracks3d=rows.get(TRACKS3D_FILE), tracks2d=rows.get(TRACKS2D_FILE),
+                    made_on=made_on)
 
 
 def _parts_table(parts: list[tuple[np.ndarray, ...]], schema: pa.Schema, box_size: int) -> pa.Table:
@@ -197,8 +219,12 @@ def read_tracks(path: Path | str, *, frame_count: int, cameras: tuple[str, ...])
         files = {_layout_of(path): path}
     else:
         raise TracksError(f"tracks {str(path)!r} does not exist")
-    rows = {name: _read(file, name, frame_count, cameras) for name, file in files.items()}
-    return TrackSet(source=str(path), tracks3d=rows.get(TRACKS3D_FILE), tracks2d=rows.get(TRACKS2D_FILE))
+    rows, made_on = {}, None
+    for name, file in files.items():
+        rows[name], recorded = _read(file, name, frame_count, cameras)
+        made_on = made_on or recorded
+    return TrackSet(source=str(path), tracks3d=rows.get(TRACKS3D_FILE), tracks2d=rows.get(TRACKS2D_FILE),
+                    made_on=made_on)
 
 
 def _layout_of(file: Path) -> str:
@@ -211,10 +237,10 @@ def _layout_of(file: Path) -> str:
     return TRACKS2D_FILE if "camera" in names else TRACKS3D_FILE
 
 
-def _read(file: Path, layout: str, frame_count: int, cameras: tuple[str, ...]) -> TrackRows:
+def _read(file: Path, layout: str, frame_count: int, cameras: tuple[str, ...]) -> tuple[TrackRows, dict | None]:
     """Read ``file`` a column at a time, each copied out of Arrow's buffers before the next is read: a long run's
     tracks are held once, as numpy, with Arrow's memory of one column at a time on top (not the whole table's,
-    which its allocator keeps after it is freed)."""
+    which its allocator keeps after it is freed). Also the dataset identity its metadata records."""
     def unreadable(error: Exception) -> TracksError:
         return TracksError(f"{file}: not a readable Parquet file ({error})")
 
@@ -230,7 +256,7 @@ def _read(file: Path, layout: str, frame_count: int, cameras: tuple[str, ...]) -
         except (pa.ArrowInvalid, OSError) as error:
             raise unreadable(error) from None
 
-    return _rows(file, parquet.schema_arrow.names, column, layout, frame_count, cameras)
+    return _rows(file, parquet.schema_arrow.names, column, layout, frame_count, cameras), _made_on(parquet.schema_arrow)
 
 
 def _rows(file: Path | str, names: list[str], column: Callable[[str], pa.ChunkedArray], layout: str,

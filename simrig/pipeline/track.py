@@ -148,8 +148,8 @@ def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = No
             rows += len(tracks)
     tables = builder.tables()
     tracks = tracks_in_memory(tables, frame_count=dataset.frame_count, cameras=cameras,
-                              source=f"tracker {label!r}")
-    path = write_tracks(out, tables) if out is not None else None
+                              source=f"tracker {label!r}", made_on=dataset.identity)
+    path = write_tracks(out, tables, made_on=dataset.identity) if out is not None else None
     return TrackingRun(path, frames, rows, elapsed, tracks)
 
 

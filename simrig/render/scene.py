@@ -23,7 +23,23 @@ import numpy as np  # noqa: E402
 if "infty" not in np.__dict__:  # pyrender 0.1.45 still uses np.infty (scene bounds), removed in numpy 2
     np.infty = np.inf  # noqa: NPY201  (without the noqa, ruff --fix rewrites this line into a no-op)
 
-import pyrender  # noqa: E402
+from ..errors import RenderPlatformError  # noqa: E402
+
+
+def _platform_error(error: BaseException) -> RenderPlatformError:
+    """The one-line error for an OpenGL platform that cannot render offscreen here."""
+    platform = os.environ.get("PYOPENGL_PLATFORM")
+    detail = " ".join(str(part) for part in getattr(error, "args", ()) if part) or type(error).__name__
+    return RenderPlatformError(
+        f"cannot render offscreen with PYOPENGL_PLATFORM={platform!r} ({type(error).__name__}: {detail}); simrig "
+        "renders headless with EGL: unset PYOPENGL_PLATFORM or set it to egl (or turn rendering off: "
+        "render.visibility = false in the scenario)")
+
+
+try:
+    import pyrender  # noqa: E402
+except (ImportError, OSError) as _error:  # the platform's GL library cannot be loaded (osmesa without OSMesa)
+    raise _platform_error(_error) from None
 import trimesh  # noqa: E402
 
 from ..geometry import camera_from_world  # noqa: E402
@@ -52,8 +68,12 @@ CLASS_COLOURS = {
 
 @functools.cache
 def offscreen_renderer() -> pyrender.OffscreenRenderer:
-    """The process's one offscreen renderer (never deleted: see the module docstring)."""
-    return pyrender.OffscreenRenderer(64, 64)
+    """The process's one offscreen renderer (never deleted: see the module docstring); a
+    :class:`~simrig.errors.RenderPlatformError` when the OpenGL platform cannot make one."""
+    try:
+        return pyrender.OffscreenRenderer(64, 64)
+    except (ValueError, RuntimeError, ImportError, OSError, AttributeError) as error:  # glx without a display, ...
+        raise _platform_error(error) from None
 
 
 def _class_mesh(actor_class: ActorClass) -> pyrender.Mesh:

@@ -71,6 +71,7 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
         tracks = read_tracks_as(tracks, fmt, frame_count=len(truth.frames), cameras=truth.rig.camera_names,
                                 tokens=sample_tokens(dataset), classes=config.classes,
                                 scenes=scene_of_frame(dataset))
+    _check_made_on(dataset, tracks)
     has_2d_tracks = tracks.tracks2d is not None and len(tracks.tracks2d) > 0
     if not dataset.has_3d and not has_2d_tracks and tracks.tracks3d is not None and len(tracks.tracks3d):
         raise TracksError(f"{tracks.source}: 3D tracks, but dataset {str(dataset.path)!r} holds 2D ground truth "
@@ -104,6 +105,18 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
                   "interpolation": interpolation,
                   "evaluation": config.model_dump(mode="json")},
     )
+
+
+def _check_made_on(dataset: Dataset, tracks: TrackSet) -> None:
+    """Tracks simrig made on one dataset are not scored on a dataset with other ground truth (another seed,
+    scenario or rig): the numbers would be meaningless, not wrong-looking."""
+    made_on = tracks.made_on
+    if made_on is None or made_on.get("ground_truth_sha256") == dataset.identity["ground_truth_sha256"]:
+        return
+    raise TracksError(f"{tracks.source}: these tracks were made on a dataset of scenario "
+                      f"{made_on.get('scenario')!r}, seed {made_on.get('seed')}, not on {str(dataset.path)!r} "
+                      f"(scenario {dataset.scenario['name']!r}, seed {dataset.seed}; its ground truth differs): "
+                      "score them on the dataset they were made on")
 
 
 def _score_3d(truth: GroundTruth, tracks: TrackSet, lookback: int, interpolation: str) -> tuple[dict, pa.Table]:

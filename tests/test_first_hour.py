@@ -1,0 +1,141 @@
+"""Defects a new user hit in the first hour (each test failed on main before its fix): a read-only working
+folder, a stray PYOPENGL_PLATFORM, tracks scored on a dataset they were not made on, and the rest of the list."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from simrig.cli import main
+
+# ------------------------------------------------------------------------------- 1. a read-only working folder
+
+
+@pytest.fixture
+def read_only(tmp_path, monkeypatch):
+    """A folder the process may not write in (``os.access`` says so, as it does on a read-only mount; a real
+    one needs privileges the tests do not have)."""
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    real = os.access
+
+    def access(path, mode, *args, **kwargs):
+        if mode & os.W_OK and Path(path).resolve() == folder.resolve():
+            return False
+        return real(path, mode, *args, **kwargs)
+
+    monkeypatch.setattr("simrig.dataset.outputs.os.access", access)
+    return folder
+
+
+@pytest.mark.parametrize("command", [
+    ["generate", "highway_stereo", "--frames", "2", "--out", "{ro}/data"],
+    ["run", "highway_stereo", "--frames", "2", "--out", "{ro}/run"],
+    ["bench", "smoke", "--out", "{ro}/bench"],
+    ["search", "{space}", "--out", "{ro}/search"],
+])
+def test_a_read_only_folder_is_refused_before_any_work(command, read_only, tmp_path, capsys):
+    from test_search_run import TINY
+
+    space = tmp_path / "tiny.toml"
+    space.write_text(TINY)
+    args = [part.format(ro=read_only, space=space) for part in command]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("simrig: error: ") and f"cannot write in {str(read_only)!r}" in err
+    assert err.count("\n") == 1 and list(read_only.iterdir()) == []
+
+
+def test_score_json_into_a_read_only_folder_is_refused_before_scoring(read_only, small_dataset, sort_tracks,
+                                                                     capsys, monkeypatch):
+    def never(*args, **kwargs):
+        raise AssertionError("scored before the output was checked")
+
+    monkeypatch.setattr("simrig.scoring.score", never)
+    assert main(["score", str(small_dataset.path), str(sort_tracks), "--json", str(read_only / "s.json")]) == 2
+    assert f"--json {str(read_only / 's.json')!r}: cannot write in" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes in a folder without write permission")
+def test_a_folder_without_write_permission_is_refused(tmp_path, capsys):
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        assert main(["generate", "highway_stereo", "--frames", "2", "--out", str(folder / "data")]) == 2
+        assert "cannot write in" in capsys.readouterr().err
+    finally:
+        folder.chmod(0o755)
+
+
+# ----------------------------------------------------------------------------------- 2. PYOPENGL_PLATFORM
+
+
+def _generate_with_platform(platform: str, tmp_path: Path) -> subprocess.CompletedProcess:
+    env = os.environ | {"PYOPENGL_PLATFORM": platform}
+    return subprocess.run([sys.executable, "-m", "simrig.cli", "generate", "highway_stereo", "--frames", "2",
+                           "--out", str(tmp_path / "data"), "--quiet"], env=env, capture_output=True, text=True,
+                          timeout=300)
+
+
+@pytest.mark.parametrize("platform", ["osmesa", "glx"])
+def test_a_platform_that_cannot_render_offscreen_is_one_line_naming_it(platform, tmp_path):
+    if platform == "osmesa":
+        import ctypes.util
+
+        if ctypes.util.find_library("OSMesa"):
+            pytest.skip("this machine has OSMesa: the osmesa platform renders")
+    done = _generate_with_platform(platform, tmp_path)
+    assert done.returncode == 2, done.stderr[-2000:]
+    assert "Traceback" not in done.stderr
+    (line,) = done.stderr.strip().splitlines()
+    assert line.startswith(f"simrig: error: cannot render offscreen with PYOPENGL_PLATFORM={platform!r}")
+    assert "unset PYOPENGL_PLATFORM or set it to egl" in line
+    assert not (tmp_path / "data").exists()  # nothing that looks like a dataset
+
+
+# ------------------------------------------------------------------------- 3. tracks from another dataset
+
+
+@pytest.fixture(scope="module")
+def other_seed(small_scenario, tmp_path_factory):
+    from simrig.dataset import Dataset
+    from simrig.pipeline.generate import generate
+
+    out = tmp_path_factory.mktemp("datasets") / "small-seed1"
+    generate(small_scenario, seed=1, out=out, progress=False)
+    return Dataset.open(out)
+
+
+def test_tracks_made_on_one_seed_are_refused_on_another(small_dataset, other_seed, saga_tracks, capsys):
+    import simrig
+
+    with pytest.raises(simrig.SimrigError, match="made on a dataset of scenario 'small', seed 0, not on"):
+        simrig.score(other_seed, saga_tracks)
+    assert main(["score", str(other_seed.path), str(saga_tracks)]) == 2
+    err = capsys.readouterr().err
+    assert "seed 0" in err and "seed 1" in err and "score them on the dataset they were made on" in err
+    assert simrig.score(small_dataset, saga_tracks).metrics3d is not None  # its own dataset: scored
+
+
+def test_tracks_of_a_surround_run_are_refused_on_a_stereo_dataset(tmp_path, saga_tracks, capsys):
+    from simrig.pipeline.generate import generate
+
+    from simrig.scenarios import load_scenario
+
+    generate(load_scenario("highway_stereo"), seed=0, out=tmp_path / "stereo", frames=30, progress=False)
+    assert main(["score", str(tmp_path / "stereo"), str(saga_tracks)]) == 2
+    assert "made on a dataset of scenario 'small'" in capsys.readouterr().err
+
+
+def test_tracks_in_memory_carry_their_dataset_too(small_dataset, other_seed):
+    import simrig
+
+    run = simrig.track(small_dataset, "sort")
+    assert run.tracks.made_on == small_dataset.identity
+    with pytest.raises(simrig.SimrigError, match="made on a dataset"):
+        simrig.score(other_seed, run.tracks)
