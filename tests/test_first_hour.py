@@ -123,9 +123,9 @@ def test_tracks_made_on_one_seed_are_refused_on_another(small_dataset, other_see
 
 
 def test_tracks_of_a_surround_run_are_refused_on_a_stereo_dataset(tmp_path, saga_tracks, capsys):
-    from simrig.pipeline.generate import generate
-
     from simrig.scenarios import load_scenario
+
+    from simrig.pipeline.generate import generate
 
     generate(load_scenario("highway_stereo"), seed=0, out=tmp_path / "stereo", frames=30, progress=False)
     assert main(["score", str(tmp_path / "stereo"), str(saga_tracks)]) == 2
