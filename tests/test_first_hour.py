@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import pytest
@@ -139,3 +140,66 @@ def test_tracks_in_memory_carry_their_dataset_too(small_dataset, other_seed):
     assert run.tracks.made_on == small_dataset.identity
     with pytest.raises(simrig.SimrigError, match="made on a dataset"):
         simrig.score(other_seed, run.tracks)
+
+
+# ------------------------------------------------------------------- 5. simrig.register() and the bench's workers
+
+USER_TRACKER = '''
+from simrig import trackers
+
+
+class Echo:
+    """Reports SAGA's tracks: a stand-in for a user's own tracker."""
+
+    def __init__(self):
+        self.inner = trackers.create("saga")
+
+    def reset(self, *, rig, seed=None):
+        self.inner.reset(rig=rig, seed=seed)
+
+    def step(self, frame):
+        return self.inner.step(frame)
+'''
+TINY_SCENARIO = ('extends = "highway_surround6"\nframes = 8\n[traffic]\nvehicles = 6\nwindow_radius_m = 100.0\n'
+                 "spawn_min_distance_m = 70.0\n[render]\nvisibility = false\n")
+ONE_CELL_SUITE = 'name = "mine"\nscenarios = ["tiny.toml"]\nseeds = [0, 1]\n[[trackers]]\ntracker = "my-echo"\n'
+
+
+def _bench_script(project: Path, tracker_in_script: bool) -> subprocess.CompletedProcess:
+    """A user's script that registers its tracker inside ``if __name__ == "__main__":`` and runs a bench with
+    two worker processes (which do not run that block)."""
+    (project / "tiny.toml").write_text(TINY_SCENARIO)
+    (project / "suite.toml").write_text(ONE_CELL_SUITE)
+    if tracker_in_script:
+        head = "import simrig\n\nif __name__ == '__main__':\n" + textwrap.indent(USER_TRACKER, "    ")
+    else:
+        (project / "my_tracker.py").write_text(USER_TRACKER)
+        head = "import simrig\nfrom my_tracker import Echo\n\nif __name__ == '__main__':\n"
+    script = head + ("    simrig.register('my-echo', Echo)\n"
+                     "    run = simrig.bench('suite.toml', workers=2, out='bench')\n"
+                     "    import pyarrow.parquet as pq\n"
+                     "    print(sorted(set(pq.read_table('bench/results.parquet').column('tracker').to_pylist())))\n")
+    (project / "drive.py").write_text(script)
+    env = os.environ | {"PYTHONPATH": str(project)}
+    return subprocess.run([sys.executable, "drive.py"], cwd=project, env=env, capture_output=True, text=True,
+                          timeout=600)
+
+
+def test_a_tracker_registered_in_a_users_module_runs_in_the_bench_workers(tmp_path):
+    done = _bench_script(tmp_path, tracker_in_script=False)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.strip().splitlines()[-1] == "['my-echo']"
+
+
+def test_a_tracker_the_workers_cannot_import_is_one_error_with_the_way_out(tmp_path):
+    done = _bench_script(tmp_path, tracker_in_script=True)
+    assert done.returncode == 1 and not (tmp_path / "bench" / "results.parquet").exists()
+    assert "tracker 'my-echo', registered with simrig.register() as __main__:Echo, cannot be imported" in done.stderr
+    assert "register it by entry point, or name it module:attribute" in done.stderr
+
+
+def test_an_unknown_tracker_name_says_how_to_make_ones_own_known(capsys):
+    assert main(["run", "highway_stereo", "--tracker", "my-echo", "--frames", "2", "--out", "x"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown tracker 'my-echo'" in err and "entry point, group 'simrig.trackers'" in err
+    assert "module:attribute" in err

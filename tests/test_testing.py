@@ -3,6 +3,7 @@ from a project outside this repository, and replay files."""
 
 import os
 import random
+import re
 import subprocess
 import sys
 import textwrap
@@ -181,7 +182,9 @@ def plugin_project(python: str, project, env: dict) -> None:
     that the shrunk scenario is written, named in the report, and reproduced by ``simrig replay``."""
     (project / "broken_tracker.py").write_text(textwrap.dedent(BROKEN))
     (project / "test_property.py").write_text(textwrap.dedent(PROPERTY))
-    env = {**env, "PYTHONPATH": str(project)}
+    # no PYTHONPATH: pytest finds broken_tracker beside the test file, the simrig command would not
+    env = {key: value for key, value in env.items() if key != "PYTHONPATH"}
+    env["PATH"] = f"{os.path.dirname(python)}{os.pathsep}{env.get('PATH', '')}"  # where `simrig` is installed
     run = subprocess.run([python, "-m", "pytest", "-q", "-p", "no:cacheprovider", "test_property.py"],
                          cwd=project, env=env, capture_output=True, text=True, timeout=600)
     output = run.stdout + run.stderr
@@ -189,6 +192,12 @@ def plugin_project(python: str, project, env: dict) -> None:
     replay_file = project / "simrig-failures" / "test_the_tracker_keeps_tracking_through_misses.toml"
     command = f"simrig replay {replay_file} --tracker broken_tracker:DropsAfterOcclusion"
     assert replay_file.is_file() and command in output  # the tracker named on the command line, not imported
+    printed = re.search(r"reproduce it with: (.*)", output).group(1)
+    assert printed == f"PYTHONPATH={project} {command}"  # runs as printed, in the same folder
+    again = subprocess.run(["bash", "-c", printed], cwd=project, env=env, capture_output=True, text=True,
+                           timeout=300)
+    assert again.returncode == 0 and "reproduced: all" in again.stdout, again.stdout[-2000:] + again.stderr[-2000:]
+    env = {**env, "PYTHONPATH": str(project)}
     replay = load_replay(replay_file)
     assert replay.tracker == "broken_tracker:DropsAfterOcclusion" and "recall below one half" in replay.failure
     recorded = replay.scores["2d"]
@@ -197,10 +206,6 @@ def plugin_project(python: str, project, env: dict) -> None:
     refused = subprocess.run([python, "-m", "simrig.cli", "replay", str(replay_file)], cwd=project, env=env,
                              capture_output=True, text=True, timeout=300)
     assert refused.returncode == 2 and "--trust-file" in refused.stderr and refused.stderr.count("\n") == 1
-    again = subprocess.run([python, "-m", "simrig.cli", "replay", str(replay_file), "--tracker",
-                            "broken_tracker:DropsAfterOcclusion"], cwd=project, env=env,
-                           capture_output=True, text=True, timeout=300)
-    assert again.returncode == 0 and "reproduced: all" in again.stdout, again.stdout[-2000:] + again.stderr[-2000:]
 
 
 def test_plugin_from_a_project_outside_the_repository_writes_a_replay_that_reproduces_the_failure(tmp_path):

@@ -21,6 +21,8 @@ from .protocol import Tracker
 
 ENTRY_POINT_GROUP = "simrig.trackers"
 _FACTORIES: dict[str, Callable[..., Tracker]] = {}
+_REGISTERED_HERE: dict[str, str] = {}
+"""name → ``module:qualname`` of a factory a user registered with :func:`register` in this process."""
 
 
 def register(name: str, factory: Callable[..., Tracker], *, replace: bool = False) -> None:
@@ -30,6 +32,31 @@ def register(name: str, factory: Callable[..., Tracker], *, replace: bool = Fals
     if name in _FACTORIES and not replace and _FACTORIES[name] is not factory:
         raise ValueError(f"tracker {name!r} is already registered")
     _FACTORIES[name] = factory
+    module = getattr(factory, "__module__", None) or ""
+    if not module.startswith(__name__.rpartition(".")[0] + "."):  # a user's tracker, not one of simrig's
+        _REGISTERED_HERE[name] = f"{module}:{getattr(factory, '__qualname__', '')}"
+
+
+def registered_here(name: str) -> str | None:
+    """``module:qualname`` of the factory registered as ``name`` by :func:`register` in this process from a
+    user's module (not simrig's own, not an entry point), or ``None``. Other processes (a bench's workers) do
+    not see such a registration: they import this reference instead (:func:`register_again`)."""
+    return _REGISTERED_HERE.get(name)
+
+
+def register_again(name: str, reference: str) -> None:
+    """In another process, register ``name`` as the factory at ``reference`` (``module:qualname``, from
+    :func:`registered_here`), unless the name is already known there."""
+    import importlib
+
+    _load_entry_points()
+    if name in _FACTORIES:
+        return
+    module, _, qualname = reference.partition(":")
+    target = importlib.import_module(module)
+    for part in qualname.split("."):
+        target = getattr(target, part)
+    _FACTORIES[name] = target
 
 
 def _load_entry_points() -> None:
@@ -51,7 +78,9 @@ def create(name: str, **params) -> Tracker:
         factory = _FACTORIES[name]
     except KeyError:
         known = ", ".join(sorted(_FACTORIES)) or "none registered"
-        raise KeyError(f"unknown tracker {name!r}; known: {known}") from None
+        raise KeyError(f"unknown tracker {name!r}; known: {known} (a tracker of your own is known by name to every "
+                       f"simrig command once registered by entry point, group {ENTRY_POINT_GROUP!r} in your "
+                       "package's pyproject.toml; or name it as module:attribute)") from None
     _check_params(name, factory, params)
     tracker = factory(**params)
     if not isinstance(tracker, Tracker):

@@ -14,6 +14,7 @@ from simrig.pipeline.cache import cached_dataset
 from simrig.pipeline.guard import TrackerFault, TrackerTimeout
 from simrig.pipeline.track import run_tracker
 from simrig.scoring.results import METRICS_2D, METRICS_3D
+from simrig.trackers.registry import register_again
 
 from ..errors import SimrigError
 from ..scoring import ScoreReport, score
@@ -50,6 +51,14 @@ class Outcome:
 
 def evaluate(job: Job) -> tuple[list[Outcome], float]:
     """Every pending tracker of ``job`` on its cell, and the seconds spent finding or generating the dataset."""
+    for name, reference in job.registered:  # simrig.register() calls made in the driver's process
+        try:
+            register_again(name, reference)
+        except Exception as error:  # noqa: BLE001  (whatever importing the user's module raised)
+            raise BenchError(f"tracker {name!r}, registered with simrig.register() as {reference}, cannot be "
+                             f"imported in a bench worker ({type(error).__name__}: {error}): define it at the "
+                             "top level of a module of its own, register it by entry point, or name it "
+                             "module:attribute") from None
     started = time.perf_counter()
     where = f"cell {job.cell} ({job.scenario.name}, seed {job.seed}, {job.frames} frames)"
     try:

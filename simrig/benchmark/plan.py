@@ -15,6 +15,7 @@ from pathlib import Path
 
 from simrig.pipeline.content_keys import dataset_key, world_key
 from simrig.scenarios import Scenario
+from simrig.trackers.registry import registered_here
 
 from .parameters import apply_parameter, parameter_value
 from .suite import Suite, SuiteError, TrackerEntry, tracker_runs_on
@@ -56,6 +57,9 @@ class Job:
     trackers: tuple[tuple[str, TrackerEntry], ...]
     frame_time_limit_s: float = 60.0
     """[s] limit on one tracker call (the suite's ``frame_time_limit_s``; 0: none)."""
+    registered: tuple[tuple[str, str], ...] = ()
+    """(name, ``module:qualname``) of trackers registered with ``simrig.register`` in the driver's process, which
+    a worker registers again before it runs them (:func:`simrig.trackers.registry.register_again`)."""
 
 
 def tracker_key(entry: TrackerEntry) -> str:
@@ -88,13 +92,15 @@ class Plan:
         with an earlier one (detector sweeps), so that by the time those start their world is likely in the
         cache and only the sensor model runs. Results are written in plan order whatever the run order."""
         first, later, worlds = [], [], set()
+        registered = tuple((entry.tracker, reference) for entry in self.suite.trackers
+                           if (reference := registered_here(entry.tracker)) is not None)
         for key, pairs in self.work().items():
             pending = tuple(pair for pair in pairs if (key, pair[0]) not in finished)
             scenario, seed, frames = self.cells[key]
             world = world_key(scenario, seed, frames)
             if pending:
                 (later if world in worlds else first).append(Job(key, scenario, seed, frames, cache, pending,
-                                                                    self.suite.frame_time_limit_s))
+                                                                    self.suite.frame_time_limit_s, registered))
             worlds.add(world)
         return first + later
 

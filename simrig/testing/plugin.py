@@ -85,8 +85,29 @@ def pytest_runtest_makereport(item, call):
     # a module:attribute tracker is named on the command line: the file alone may not import it
     from simrig.pipeline.trust import is_import_reference
 
+    imported = is_import_reference(last.tracker)
     command = shlex.join(["simrig", "replay", str(written)]
-                         + (["--tracker", last.tracker] if is_import_reference(last.tracker) else [])
+                         + (["--tracker", last.tracker] if imported else [])
                          + ([] if last.tracker else ["--tracker", "NAME"]))
+    root = _import_root(last.tracker) if imported else None
+    if root is not None:  # the module was found on a path pytest added: the simrig command needs it too
+        command = f"PYTHONPATH={shlex.quote(str(root))} {command}"
     report.sections.append(("simrig replay", f"scenario of the failing run written to {written}\n"
                                              f"reproduce it with: {command}"))
+
+
+def _import_root(spec: str) -> Path | None:
+    """The folder a ``module:attribute`` tracker's top-level package or module was imported from, when that is
+    not where installed packages live (a project folder pytest put on ``sys.path``); ``None`` otherwise."""
+    import sys
+    import sysconfig
+
+    top = sys.modules.get(spec.partition(":")[0].partition(".")[0])
+    origin = getattr(getattr(top, "__spec__", None), "origin", None)
+    if not origin:
+        return None
+    path = Path(origin).resolve()
+    root = path.parent.parent if path.name == "__init__.py" else path.parent
+    installed = {Path(sysconfig.get_paths()[key]).resolve() for key in ("purelib", "platlib", "stdlib")}
+    return None if root in installed else root
+
