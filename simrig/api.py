@@ -71,23 +71,29 @@ def track(dataset: Dataset | Path | str, tracker, *, params: dict | None = None,
 
 
 def score(dataset: Dataset | Path | str, tracks: TrackingRun | TrackSet | Path | str, *,
-          camera: str | None = None, lookback_s: float | None = None) -> ScoreReport:
+          camera: str | None = None, lookback_s: float | None = None, truth=None, evaluation=None,
+          fmt: str | None = None, interpolation: str = "devkit") -> ScoreReport:
     """Score ``tracks`` (what :func:`track` returned, a tracks folder or file) against ``dataset``: 3D and
-    per-camera 2D metrics and every error with its causes (``camera``: that camera alone, in 2D)."""
-    from simrig.pipeline.track import TrackingRun
+    per-camera 2D metrics and every error with its causes (``camera``: that camera alone, in 2D). ``truth``,
+    ``evaluation``, ``fmt`` and ``interpolation`` as in :func:`simrig.scoring.score` (ground truth already read,
+    ``[evaluation]`` keys on top of the dataset's, the tracks' format, how 3D track gaps are filled).
+
+    Loads no tracker: scoring needs only the dataset and the tracks."""
     from simrig.scoring import score as _score
     from simrig.scoring.api import LOOKBACK_S
 
-    if isinstance(tracks, TrackingRun):
+    if not isinstance(tracks, (str, Path)) and hasattr(tracks, "tracks"):  # a TrackingRun (not imported: no tracker)
         tracks = tracks.tracks
-    return _score(dataset, tracks, camera=camera, lookback_s=LOOKBACK_S if lookback_s is None else lookback_s)
+    return _score(dataset, tracks, camera=camera, lookback_s=LOOKBACK_S if lookback_s is None else lookback_s,
+                  truth=truth, evaluation=evaluation, fmt=fmt, interpolation=interpolation)
 
 
-def run(scenario: str | Path | Scenario = "highway_surround6", *, seed: int = 0, tracker: str = "saga",
+def run(scenario: str | Path | Scenario = "highway_surround6", *, seed: int = 0, tracker="saga",
         params: dict | None = None, out: Path | str | None = None, frames: int | None = None,
         overwrite: bool = False, camera: str | None = None, frame_time_limit_s: float | None = 60.0) -> PipelineResult:
     """Generate, track, score and report into ``out`` (default ``runs/SCENARIO-seedN``), as ``simrig run``: a
-    matching complete dataset already in ``out/dataset`` is reused."""
+    matching complete dataset already in ``out/dataset`` is reused. ``tracker``: anything :func:`track` takes
+    (a registered name, ``"module:attribute"``, a factory or class, a tracker object)."""
     from simrig.pipeline.run import run_pipeline
 
     return run_pipeline(scenario, seed=seed, tracker=tracker, params=params, out=out, frames=frames,

@@ -361,6 +361,7 @@ def _register_track(commands) -> None:
     track.add_argument("dataset", type=Path)
     _tracker_arguments(track)
     track.add_argument("--out", type=Path, required=True, help="tracks folder to write")
+    track.add_argument("--overwrite", action="store_true", help="replace the tracks already in --out")
     track.add_argument("--images", action="store_true",
                        help="the tracker needs images: fail unless the dataset has them (SensorFrame.images)")
     track.set_defaults(run=_cmd_track)
@@ -372,6 +373,12 @@ def _cmd_track(args: argparse.Namespace) -> int:
     from .dataset import Dataset
 
     _output(args.out, "--out", inputs=(args.dataset,))
+    from .dataset.tracks_file import TRACKS2D_FILE, TRACKS3D_FILE
+
+    held = [name for name in (TRACKS3D_FILE, TRACKS2D_FILE) if (args.out / name).exists()]
+    if held and not args.overwrite:
+        raise SimrigError(f"--out {str(args.out)!r} already holds tracks ({', '.join(held)}); pass --overwrite to "
+                          "replace them or choose another folder")
     dataset = Dataset.open(args.dataset)
     if args.images and dataset.image_folder is None:
         raise SimrigError(f"--images: {args.dataset} has no images (generate it with --images)")
@@ -486,7 +493,8 @@ def _register_explain(commands) -> None:
     explainer = commands.add_parser(
         "explain", help="what each cause of detector error cost a run's tracker (counterfactual reruns, Shapley)")
     explainer.add_argument("run_dir", type=Path, help="a 'simrig run' folder (dataset/, tracks/, scores/)")
-    explainer.add_argument("--label", default=None, help="which tracker run of RUN_DIR/tracks/ (when it holds several)")
+    explainer.add_argument("--tracker", "--label", dest="label", default=None, metavar="LABEL",
+                           help="which tracker run of RUN_DIR/tracks/ (when it holds several), as view --tracker")
     explainer.add_argument("--metric", type=_names, default=None, metavar="A,B,...",
                            help="overall metrics to explain (default AMOTA,HOTA,IDS,FN,FRAG for a 3D tracker; "
                                 "2d:NAME or 3d:NAME picks a dimension)")
@@ -602,9 +610,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 def _register_report(commands) -> None:
     """``simrig report``'s options."""
-    report = commands.add_parser("report", help="write reports/SUITE/index.md with plots from a bench folder")
+    report = commands.add_parser("report", help="write a bench's report (index.md with plots) from its folder")
     report.add_argument("results", type=Path, help="a bench folder (or its results.parquet)")
-    report.add_argument("--out", type=Path, default=None, help="report folder (default: reports/SUITE)")
+    report.add_argument("--out", type=Path, default=None, help="report folder (default: BENCH/report)")
     report.set_defaults(run=_cmd_report)
 
 

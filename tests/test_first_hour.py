@@ -203,3 +203,108 @@ def test_an_unknown_tracker_name_says_how_to_make_ones_own_known(capsys):
     err = capsys.readouterr().err
     assert "unknown tracker 'my-echo'" in err and "entry point, group 'simrig.trackers'" in err
     assert "module:attribute" in err
+
+
+# ------------------------------------------------------------------------ 6, 7: simrig.score and simrig.run
+
+
+def test_the_front_door_score_takes_what_the_scorer_takes(small_dataset, saga_tracks):
+    import simrig
+
+    truth = small_dataset.ground_truth
+    everything = simrig.score(small_dataset, saga_tracks, truth=truth, evaluation={"ignore": False})
+    assert everything.metrics2d["ground_truth"]["overall"]["ignored"] == 0
+    as_given = simrig.score(small_dataset, saga_tracks, interpolation="none", fmt="simrig")
+    assert as_given.settings["interpolation"] == "none"
+    assert simrig.score(small_dataset, saga_tracks).settings["interpolation"] == "devkit"
+
+
+def test_the_front_door_score_loads_no_tracker(small_dataset, saga_tracks):
+    code = ("import sys, simrig\n"
+            f"simrig.score({str(small_dataset.path)!r}, {str(saga_tracks)!r})\n"
+            "print(sorted(m for m in sys.modules if m.startswith(('simrig.trackers', 'simrig.pipeline', "
+            "'filterpy'))))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip() == "[]"
+
+
+class Still:
+    """A tracker class that reports nothing."""
+
+    def reset(self, *, rig, seed=None):
+        pass
+
+    def step(self, frame):
+        return []
+
+
+def test_run_takes_a_tracker_class_as_track_does(tmp_path):
+    import simrig
+
+    result = simrig.run("highway_stereo", tracker=Still, frames=5, out=tmp_path / "run")
+    label = f"{__name__}_Still"  # module:qualname, the ':' made safe for a folder name
+    assert result.label == label and (tmp_path / "run" / "tracks" / label).is_dir()
+    text = (tmp_path / "run" / "scores" / label / "report.md").read_text()
+    assert f"--tracker {__name__}:Still" in text  # the command that reproduces it
+
+
+# ----------------------------------------------------------------- 8: a camera the rig lacks, before any work
+
+
+def test_run_refuses_a_camera_the_rig_lacks_before_generating(tmp_path, capsys):
+    assert main(["run", "stereo_occluder", "--camera", "CAM_FRONT", "--out", str(tmp_path / "run")]) == 2
+    err = capsys.readouterr().err
+    assert "--camera 'CAM_FRONT': scenario 'stereo_occluder'" in err and "left, right" in err
+    assert not (tmp_path / "run" / "dataset").exists()
+
+
+# ------------------------------------------------------------------------------------------ 10: the rest
+
+
+def test_a_parameter_of_the_wrong_kind_is_named(capsys):
+    assert main(["run", "highway_stereo", "--tracker", "saga", "--param", "max_age_s=abc", "--frames", "2",
+                 "--out", "never"]) == 2
+    assert "tracker 'saga': parameter max_age_s='abc' must be a number (its default is 1.0)" in capsys.readouterr().err
+    assert not Path("never").exists()
+
+
+def test_track_does_not_overwrite_tracks_unasked(small_dataset, tmp_path, capsys):
+    out = tmp_path / "tracks"
+    assert main(["track", str(small_dataset.path), "--tracker", "sort", "--out", str(out)]) == 0
+    before = (out / "tracks2d.parquet").read_bytes()
+    assert main(["track", str(small_dataset.path), "--tracker", "saga", "--out", str(out)]) == 2
+    assert "already holds tracks (tracks2d.parquet); pass --overwrite" in capsys.readouterr().err
+    assert (out / "tracks2d.parquet").read_bytes() == before
+    assert main(["track", str(small_dataset.path), "--tracker", "saga", "--out", str(out), "--overwrite"]) == 0
+    assert (out / "tracks3d.parquet").is_file()
+
+
+def test_a_parameterised_run_label_reads_as_its_parameters(tmp_path):
+    import simrig
+
+    result = simrig.run("highway_stereo", tracker="sort", params={"max_age": 3}, frames=3, out=tmp_path / "run")
+    assert result.label.startswith("sort-max_age=3-") and len(result.label) == len("sort-max_age=3-") + 8
+
+
+def test_report_writes_into_the_bench_folder_by_default(tmp_path, monkeypatch):
+    from test_bench import TINY_SCENARIO
+
+    from simrig.report import write_report
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "tiny.toml").write_text(TINY_SCENARIO.replace("frames = 25", "frames = 5"))
+    (tmp_path / "suite.toml").write_text('name = "mini"\nscenarios = ["tiny.toml"]\nseeds = [0]\n'
+                                         '[[trackers]]\ntracker = "saga"\n')
+    assert main(["bench", "suite.toml", "--out", "bench", "--workers", "1", "--quiet"]) == 0
+    written = write_report(tmp_path / "bench")
+    assert written == tmp_path / "bench" / "report" / "index.md" and not (tmp_path / "reports").exists()
+
+
+def test_explain_and_view_choose_a_run_with_the_same_option():
+    from simrig.cli import build_parser
+
+    parser = build_parser()
+    assert parser.parse_args(["explain", "R", "--tracker", "saga"]).label == "saga"
+    assert parser.parse_args(["explain", "R", "--label", "saga"]).label == "saga"  # the older spelling
+    assert parser.parse_args(["view", "R", "--tracker", "saga"]).tracker == "saga"

@@ -112,10 +112,28 @@ def _check_params(name: str, factory: Callable[..., Tracker], params: dict) -> N
         signature = inspect.signature(factory)
     except (TypeError, ValueError):
         return
-    if any(p.kind is p.VAR_KEYWORD for p in signature.parameters.values()):
-        return
-    known = parameters(name)
-    unknown = sorted(set(params) - set(known))
-    if unknown:
-        listed = ", ".join(known) or "none"
-        raise ValueError(f"tracker {name!r} has no parameter {unknown[0]!r}; parameters: {listed}")
+    if not any(p.kind is p.VAR_KEYWORD for p in signature.parameters.values()):
+        known = parameters(name)
+        unknown = sorted(set(params) - set(known))
+        if unknown:
+            listed = ", ".join(known) or "none"
+            raise ValueError(f"tracker {name!r} has no parameter {unknown[0]!r}; parameters: {listed}")
+    check_param_types(name, signature, params)
+
+
+def check_param_types(name: str, signature: inspect.Signature, params: dict) -> None:
+    """A parameter whose default is a number, a flag or a string must be given one of the same kind (an int
+    where the default is a float is fine; a flag is not a number): a ``ValueError`` naming the tracker, the
+    parameter, the value and what it takes, before the factory sees it."""
+    kinds = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
+    for key, value in params.items():
+        parameter = signature.parameters.get(key)
+        default = None if parameter is None else parameter.default
+        expected = type(default)
+        if expected not in kinds:
+            continue  # no default, None, or a richer type: the factory judges it
+        fits = (isinstance(value, expected) and not (expected is not bool and isinstance(value, bool))) or (
+            expected is float and isinstance(value, int) and not isinstance(value, bool))
+        if not fits:
+            raise ValueError(f"tracker {name!r}: parameter {key}={value!r} must be {kinds[expected]} (its "
+                             f"default is {default!r})")

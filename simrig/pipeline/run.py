@@ -28,7 +28,15 @@ from simrig.errors import DatasetError, DatasetExistsError
 from simrig.names import path_part
 from simrig.pipeline.generate import generate
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
-from simrig.pipeline.track import TrackingRun, build_tracker, run_tracker
+from simrig.pipeline.track import (
+    TrackingError,
+    TrackingRun,
+    build_tracker,
+    run_tracker,
+    tracker_display,
+    tracker_reference,
+)
+from simrig.rig import build_rig
 from simrig.scenarios import Scenario, load_scenario
 from simrig.scoring import ScoreReport, score
 
@@ -47,18 +55,27 @@ class PipelineResult:
     label: str
 
 
-def _run_label(tracker: str, params: dict | None, camera: str | None) -> str:
-    """The folder name of a tracker run: the tracker's name (characters other than letters, digits, ``_.-``
-    replaced), plus an 8-digit key of its parameters and camera when it has any.
+LABEL_LIMIT = 80
+"""[characters] a run label longer than this keeps the tracker's name and the key alone."""
 
-    >>> _run_label("saga", None, None), _run_label("saga", {"gate": 4}, None) == _run_label("saga", {"gate": 4}, None)
-    ('saga', True)
+
+def _run_label(tracker: str, params: dict | None, camera: str | None) -> str:
+    """The folder name of a tracker run: the tracker's name, then each parameter as ``KEY=VALUE`` and the
+    camera (characters other than letters, digits, ``_.=-`` replaced), then an 8-digit key of the parameters and
+    camera, which keeps two runs apart whose readable parts look alike; past :data:`LABEL_LIMIT` characters,
+    the name and the key alone.
+
+    >>> _run_label("saga", None, None), _run_label("saga", {"gate": 4}, None)
+    ('saga', 'saga-gate=4-fb0d72d1')
     """
     name = re.sub(r"[^\w.-]", "_", tracker)
     if not params and camera is None:
         return name
     identity = json.dumps({"params": params or {}, "camera": camera}, sort_keys=True, default=str)
-    return f"{name}-{hashlib.sha256(identity.encode()).hexdigest()[:8]}"
+    key = hashlib.sha256(identity.encode()).hexdigest()[:8]
+    readable = [f"{k}={v}" for k, v in sorted((params or {}).items())] + ([f"camera={camera}"] if camera else [])
+    label = re.sub(r"[^\w.=-]", "_", "-".join([name, *readable, key]))
+    return label if len(label) <= LABEL_LIMIT else f"{name}-{key}"
 
 
 def _matching_dataset(folder: Path, scenario: Scenario, seed: int, frames: int) -> bool | None:
@@ -80,7 +97,7 @@ def run_pipeline(
     scenario: str | Path | Scenario,
     *,
     seed: int = 0,
-    tracker: str = "saga",
+    tracker="saga",
     params: dict | None = None,
     out: Path | str | None = None,
     frames: int | None = None,
@@ -102,6 +119,11 @@ def run_pipeline(
     check_output_path(out, what="--out")
     check_own_folder(out, what="run folder", marker=DATASET_DIR)  # a run writes its dataset first
     build_tracker(tracker, params)  # checked early: a typo should not cost a generation
+    if camera is not None:  # and the camera too: the rig is known before anything is generated
+        cameras = build_rig(loaded.rig).camera_names
+        if camera not in cameras:
+            raise TrackingError(f"--camera {camera!r}: scenario {loaded.name!r}'s rig has cameras "
+                                f"{', '.join(cameras)}")
     frame_count = loaded.frames if frames is None else frames
     folder = out / DATASET_DIR
     matches = _matching_dataset(folder, loaded, seed, frame_count)
@@ -121,7 +143,8 @@ def run_pipeline(
         generate(loaded, seed=seed, out=folder, frames=frames, overwrite=overwrite, progress=progress, images=images)
         generation_s = time.perf_counter() - started
     dataset = Dataset.open(folder)
-    label = _run_label(tracker, params, camera)
+    reference = tracker if isinstance(tracker, str) else tracker_reference(tracker)
+    label = _run_label(reference or tracker_display(tracker), params, camera)
     tracking = run_tracker(dataset, tracker, out / TRACKS_DIR / label, params, frame_time_limit_s=frame_time_limit_s)
     _record_tracker(tracking.out, tracker, params, camera)
     report = score(dataset, tracking.tracks, camera=camera)  # scored in memory; the folder is for the user
@@ -132,7 +155,7 @@ def run_pipeline(
     write_text_atomic(json_path, json.dumps(report.to_dict(), indent=2) + "\n")
     with atomic_file(errors_path) as partial:
         report.write_errors(partial)
-    command = _command(scenario, seed, tracker, params, frames, camera, images)
+    command = _command(scenario, seed, reference or tracker_display(tracker), params, frames, camera, images)
     write_text_atomic(markdown, f"## {loaded.name}, seed {seed}, tracker {tracker}\n\n"
                                  f"Produced by `{command}`.\n\n```\n{report.table()}\n```\n")
     write_json_atomic(scores / "timings.json", {

@@ -6,6 +6,7 @@ the bench and the CLI both come through here, so a user's tracker and the refere
 
 from __future__ import annotations
 
+import inspect
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -28,6 +29,7 @@ from simrig.interrupts import stop_if_interrupted
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S, TrackerFault, checked_tracks, time_limit
 from simrig.pipeline.trust import TrackerReferenceError, import_tracker_factory
 from simrig.trackers.errors import TrackerInputError
+from simrig.trackers.registry import check_param_types
 from simrig.types import Track
 
 
@@ -64,6 +66,11 @@ def build_tracker(name, params: dict | None = None):
             if params:
                 raise TrackingError(f"tracker {name!r}: parameters {sorted(params)} given for a tracker object")
             return name
+        try:
+            check_param_types(getattr(name, "__qualname__", repr(name)), inspect.signature(name), params)
+        except (TypeError, ValueError) as error:  # TypeError, ValueError: a callable without a signature
+            if isinstance(error, ValueError) and str(error).startswith("tracker "):
+                raise TrackingError(str(error)) from None
         try:
             built = name(**params)
         except TypeError as error:
@@ -109,7 +116,7 @@ def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = No
     if out is not None:  # before any work: a tracks folder holds tracks, never a user's other files
         check_own_folder(Path(out), what="tracks folder", marker=TRACKS2D_FILE, made=(TRACKS3D_FILE, "tracker.json"))
     tracker = build_tracker(name, params)
-    label = _display(name)
+    label = tracker_display(name)
     cameras = dataset.rig.camera_names
     with _guarded(label, "reset()", frame_time_limit_s):
         tracker.reset(rig=dataset.rig, seed=dataset.seed if seed is None else seed)
@@ -166,6 +173,19 @@ def _guarded(tracker: str, call: str, seconds: float | None) -> Iterator[None]:
         raise TrackerFault(f"tracker {tracker!r}: {call} raised {type(error).__name__}: {error}") from error
 
 
-def _display(name) -> str:
+def tracker_display(name) -> str:
     """A tracker reference as a user would name it."""
     return name if isinstance(name, str) else getattr(name, "__qualname__", type(name).__name__)
+
+
+def tracker_reference(tracker) -> str | None:
+    """A string that names ``tracker`` on a command line (``simrig run``, ``simrig replay``): itself if a
+    string, else ``module:qualname`` of a class or function (``None`` when it has none, e.g. a lambda or an
+    instance of a local class)."""
+    if isinstance(tracker, str):
+        return tracker
+    target = tracker if callable(tracker) and hasattr(tracker, "__qualname__") else type(tracker)
+    qualname, module = getattr(target, "__qualname__", ""), getattr(target, "__module__", "")
+    if not module or "<" in qualname:
+        return None
+    return f"{module}:{qualname}"

@@ -18,13 +18,16 @@ from .load import BenchResults, load_bench
 from .summary import camera_table, causes_table, paired_table, scenario_table, tracker_table
 from .worst_cell import inspect_worst
 
+DEFAULT_REPORT_DIR = "report"
+"""The report's folder inside the bench folder when no ``out`` is given (never a folder of the working tree)."""
+
 
 def write_report(results: Path | str, *, out: Path | str | None = None) -> Path:
-    """Write the report of the bench folder ``results`` into ``out`` (default ``reports/SUITE``): index.md,
+    """Write the report of the bench folder ``results`` into ``out`` (default ``BENCH/report``): index.md,
     the figures, and copies of the results, causes and bench description it was made from (so that
     ``simrig report OUT`` makes it again). Returns the path of index.md."""
     bench = load_bench(results)
-    out = Path(out) if out is not None else Path("reports") / bench.suite
+    out = Path(out) if out is not None else bench.folder / DEFAULT_REPORT_DIR
     check_output_path(out, what="--out")
     check_own_folder(out, what="report folder", marker=BENCH_FILE, marker_keys=("suite", "command", "cells"))
     out.mkdir(parents=True, exist_ok=True)

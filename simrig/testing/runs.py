@@ -16,6 +16,7 @@ from pathlib import Path
 from simrig.pipeline.cache import cached_dataset
 from simrig.pipeline.content_keys import dataset_key
 from simrig.pipeline.track import run_tracker as run_on_dataset
+from simrig.pipeline.track import tracker_reference
 from simrig.scenarios.schema import Scenario
 
 from ..dataset import Dataset
@@ -67,25 +68,13 @@ def dataset_for(scenario: Scenario, seed: int = 0, frames: int | None = None) ->
     return _CACHE[key]
 
 
-def _tracker_spec(tracker) -> str | None:
-    """A string that names ``tracker`` for ``simrig replay``: itself if a string, else ``module:qualname`` of a
-    class or function (``None`` when it has none, e.g. a lambda or an instance of a local class)."""
-    if isinstance(tracker, str):
-        return tracker
-    target = tracker if callable(tracker) and hasattr(tracker, "__qualname__") else type(tracker)
-    qualname, module = getattr(target, "__qualname__", ""), getattr(target, "__module__", "")
-    if not module or "<" in qualname:
-        return None
-    return f"{module}:{qualname}"
-
-
 def run_tracker(tracker, scenario: Scenario, *, seed: int = 0, params: dict | None = None,
                 frames: int | None = None, camera: str | None = None) -> ScoreReport:
     """Generate ``scenario`` with ``seed`` (cached), run ``tracker`` — a registered name, ``module:attribute``,
     a factory or class (called with ``params``), or a tracker object — over it and return the scores
     (``camera``: one camera only, as ``simrig score --camera``)."""
     dataset = dataset_for(scenario, seed, frames)
-    spec = _tracker_spec(tracker)
+    spec = tracker_reference(tracker)
     run = Run(scenario, seed, spec, dict(params or {}))
     _RUNS.append(run)
     outcome = run_on_dataset(dataset, tracker, None, params)
