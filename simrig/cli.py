@@ -685,6 +685,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _OneLineParser(
         prog="simrig", description="A test bench for multi-camera multi-object trackers on moving vehicles."
     )
+    from .version import DISTRIBUTION, __version__
+
+    parser.add_argument("--version", action="version", version=f"simrig {__version__} (pip: {DISTRIBUTION})")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     from .detector.cli import add_detector_command
 

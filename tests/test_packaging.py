@@ -37,3 +37,42 @@ def test_every_package_folder_is_listed_and_nothing_installs_outside_simrig() ->
     assert listed - data_only == on_disk  # a catalog folder of TOML files is listed so that setuptools ships it
     assert all(_folder(name).is_dir() for name in data_only)
     assert all(name == "simrig" or name.startswith("simrig.") for name in listed)
+
+
+def test_version_names_the_distribution_to_install(capsys) -> None:
+    import pytest
+
+    from simrig.cli import main
+    from simrig.version import DISTRIBUTION, __version__
+
+    with pytest.raises(SystemExit) as stop:
+        main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out == f"simrig {__version__} (pip: {DISTRIBUTION})\n"
+    with (ROOT / "pyproject.toml").open("rb") as handle:
+        assert tomllib.load(handle)["project"]["name"] == DISTRIBUTION == "simrig-mot"
+
+
+def test_the_wheel_and_sdist_pass_twine_check_under_the_distribution_name(tmp_path) -> None:
+    """Built as a release would be (``python -m build``), both pass ``twine check``; the wheel's metadata names
+    the distribution ``simrig-mot`` with the ``testing`` extra, and installs the ``simrig`` command."""
+    import subprocess
+    import sys
+    import zipfile
+
+    import pytest
+
+    pytest.importorskip("build")
+    pytest.importorskip("twine")
+    subprocess.run([sys.executable, "-m", "build", "--sdist", "--wheel", "--outdir",
+                    str(tmp_path), str(ROOT)], check=True, capture_output=True, timeout=600)
+    wheel, = tmp_path.glob("simrig_mot-*.whl")
+    sdist, = tmp_path.glob("simrig_mot-*.tar.gz")
+    checked = subprocess.run([sys.executable, "-m", "twine", "check", "--strict", str(wheel), str(sdist)],
+                             capture_output=True, text=True, timeout=300)
+    assert checked.returncode == 0, checked.stdout + checked.stderr
+    with zipfile.ZipFile(wheel) as archive:
+        metadata = archive.read(next(n for n in archive.namelist() if n.endswith(".dist-info/METADATA"))).decode()
+        entry_points = archive.read(next(n for n in archive.namelist() if n.endswith("entry_points.txt"))).decode()
+    assert "\nName: simrig-mot\n" in metadata and "Provides-Extra: testing" in metadata
+    assert "simrig = simrig.cli:console" in entry_points

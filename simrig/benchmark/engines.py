@@ -127,7 +127,7 @@ def ray_session(workers: int | None, address: str | None) -> Iterator[ModuleType
     try:
         import ray
     except ImportError:
-        raise SimrigError("--engine ray needs Ray: pip install 'simrig[ray]'") from None
+        raise SimrigError("--engine ray needs Ray: pip install 'simrig-mot[ray]'") from None
     started_here = not ray.is_initialized()
     if started_here:
         if address or os.environ.get("RAY_ADDRESS"):

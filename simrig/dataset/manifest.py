@@ -18,6 +18,8 @@ import re
 from importlib import metadata
 from pathlib import Path
 
+from simrig.version import __version__
+
 from ..errors import DatasetError
 from ..reading import open_regular, read_capped
 from .outputs import write_text_atomic
@@ -55,6 +57,9 @@ def package_versions() -> dict[str, str]:
     """Versions of the packages that shape a dataset's bytes (and Python's)."""
     versions = {"python": platform.python_version()}
     for name in _VERSIONED_PACKAGES:
+        if name == "simrig":  # this package's own version, whatever its distribution is called
+            versions[name] = __version__
+            continue
         try:
             versions[name] = metadata.version(name)
         except metadata.PackageNotFoundError:

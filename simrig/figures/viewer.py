@@ -21,7 +21,7 @@ What is logged, on the timelines ``frame`` (the dataset's frame number) and ``ti
 A run folder is what ``simrig run`` writes: ``dataset/``, ``tracks/LABEL/`` and ``scores/LABEL/errors.parquet``
 (one LABEL per tracker run into the folder; ``--tracker LABEL`` chooses when there are several). A plain
 dataset folder is logged without tracks or events. rerun-sdk is an optional extra (``pip install
-'simrig[view]'``).
+'simrig-mot[view]'``).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ from simrig.scoring.attribution import KINDS
 
 from .mosaic import CLUTTER_COLOUR, identity_colour, track_colour
 
-INSTALL_HINT = "the viewer needs rerun-sdk: pip install 'simrig[view]' (or pip install rerun-sdk)"
+INSTALL_HINT = "the viewer needs rerun-sdk: pip install 'simrig-mot[view]' (or pip install rerun-sdk)"
 
 
 def _has_display() -> bool:
