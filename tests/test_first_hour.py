@@ -308,3 +308,22 @@ def test_explain_and_view_choose_a_run_with_the_same_option():
     assert parser.parse_args(["explain", "R", "--tracker", "saga"]).label == "saga"
     assert parser.parse_args(["explain", "R", "--label", "saga"]).label == "saga"  # the older spelling
     assert parser.parse_args(["view", "R", "--tracker", "saga"]).tracker == "saga"
+
+
+# ------------------------------------------------------------ generate's printed time is the process's own
+
+
+def test_generate_prints_the_whole_process_time(tmp_path):
+    import re
+    import time
+
+    started = time.perf_counter()
+    done = subprocess.run([sys.executable, "-m", "simrig.cli", "generate", "highway_stereo", "--frames", "5",
+                           "--out", str(tmp_path / "data"), "--quiet"], capture_output=True, text=True, timeout=300)
+    wall = time.perf_counter() - started
+    assert done.returncode == 0, done.stderr[-2000:]
+    found = re.search(r"time +(\S+) s in all: start-up \(imports, scenario\) (\S+) s, generation (\S+) s", done.stdout)
+    assert found, done.stdout
+    total, start_up, generation = map(float, found.groups())
+    assert total <= wall and wall - total < 1.0  # the interpreter's own start and exit are all it leaves out
+    assert abs(total - start_up - generation) <= 0.1 and start_up > 0.2  # the imports are counted
