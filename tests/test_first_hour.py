@@ -327,3 +327,22 @@ def test_generate_prints_the_whole_process_time(tmp_path):
     total, start_up, generation = map(float, found.groups())
     assert total <= wall and wall - total < 1.0  # the interpreter's own start and exit are all it leaves out
     assert abs(total - start_up - generation) <= 0.1 and start_up > 0.2  # the imports are counted
+
+
+def test_the_scorers_hungarian_is_scipys_without_its_package_import():
+    """The solver loaded alone (``simrig.scoring.hungarian``) gives scipy's public function's answer, ties
+    included, on 300 small matrices full of ties; and scoring a dataset does not import ``scipy.optimize``."""
+    import numpy as np
+    from scipy.optimize import linear_sum_assignment as public
+
+    from simrig.scoring.hungarian import linear_sum_assignment
+
+    rng = np.random.default_rng(0)
+    for _ in range(300):
+        cost = rng.integers(0, 4, size=(rng.integers(1, 8), rng.integers(1, 8))).astype(float)
+        for ours, theirs in zip(linear_sum_assignment(cost), public(cost), strict=True):
+            np.testing.assert_array_equal(ours, theirs)
+    code = ("import sys\nfrom simrig.scoring.hungarian import linear_sum_assignment\nimport numpy as np\n"
+            "linear_sum_assignment(np.eye(3))\nprint('scipy.optimize' in sys.modules)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.stdout.strip() == "False", done.stderr[-2000:]

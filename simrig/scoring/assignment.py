@@ -10,7 +10,8 @@ do, so that ties resolve the same way.
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
+
+from .hungarian import linear_sum_assignment
 
 
 def positive_matching(score: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -8,10 +8,10 @@ rectangular maximum-weight matching used here gives TrackEval's IDTP exactly).
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from .clear import IOU_THRESHOLD
 from .counts import Counts
+from .hungarian import linear_sum_assignment
 from .ratios import identity_ratios
 from .sequence import Sequence
 
