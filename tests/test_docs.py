@@ -19,7 +19,9 @@ Directives, an HTML comment on the line(s) before a block, invisible on the rend
 * ``<!-- test: installed -->``: a bash block that starts by making a virtual environment and installing simrig
   (``python3 -m venv .venv && . .venv/bin/activate && pip install ... &&``) runs without that prefix, in the
   environment running these tests, where simrig is installed;
-* ``<!-- test: covered-by tests/test_x.py -->``: the block is run by that test, which must name this page.
+* ``<!-- test: covered-by tests/test_x.py -->``: the block is run by that test, which must name this page;
+* ``<!-- test: exit N -->``: a bash block that must exit with status N (a failing test shown, a refusal);
+* ``<!-- test: stderr -->``: its output block shows the standard output followed by the standard error.
 """
 
 from __future__ import annotations
@@ -59,6 +61,8 @@ class Block:
     file: str | None = None
     kind: str | None = None
     covered_by: str | None = None
+    exit: int = 0
+    stderr: bool = False
     output: Block | None = None  # the text block showing what this block prints
     is_output: bool = False
 
@@ -90,6 +94,10 @@ def parse_directive(body: str, block: Block) -> None:
                 block.kind = words.pop(0)
         elif word == "covered-by" and words:
             block.covered_by = words.pop(0)
+        elif word == "exit" and words and words[0].isdigit():
+            block.exit = int(words.pop(0))
+        elif word == "stderr":
+            block.stderr = True
         else:
             raise ValueError(f"{block.where}: unknown test directive {body!r}")
 
@@ -150,6 +158,8 @@ def check_page(blocks: list[Block]) -> list[str]:
             problems.append(f"{block.where}: 'installed' on a block that does not start by installing simrig")
         if block.continues and block.lang != "python":
             problems.append(f"{block.where}: 'continue' on a {block.lang} block")
+        if (block.exit or block.stderr) and block.lang not in ("bash", "console"):
+            problems.append(f"{block.where}: 'exit' or 'stderr' on a {block.lang} block")
         if block.covered_by:
             test = ROOT / block.covered_by
             page = block.page.name
@@ -259,9 +269,9 @@ def run_page(page: Path, folder: Path, *, slow: bool) -> int:
         code = INSTALL_PREFIX.sub("", block.code) if block.installed else block.code
         result = subprocess.run(["bash", "-euo", "pipefail", "-c", code], cwd=folder, env=env, capture_output=True,
                                 text=True, timeout=TIMEOUT_S)
-        assert result.returncode == 0, f"{block.where}: exit {result.returncode}\n{result.stdout[-2000:]}\n" \
-                                       f"{result.stderr[-4000:]}"
-        check_output(block, result.stdout)
+        assert result.returncode == block.exit, f"{block.where}: exit {result.returncode}, not {block.exit}\n" \
+                                                f"{result.stdout[-2000:]}\n{result.stderr[-4000:]}"
+        check_output(block, result.stdout + result.stderr if block.stderr else result.stdout)
     run_script()
     return ran
 
