@@ -31,7 +31,7 @@ import re
 import subprocess
 import sys
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -201,8 +201,8 @@ def check_output(block: Block, printed: str) -> None:
     if block.output is None:
         return
     expected, actual = trimmed(block.output.code), trimmed(printed)
-    assert match_lines(expected, actual), (
-        f"{block.where} printed\n" + "\n".join(actual) + f"\n\nwhere {block.output.where} shows\n" + "\n".join(expected))
+    assert match_lines(expected, actual), (f"{block.where} printed\n" + "\n".join(actual)
+                                           + f"\n\nwhere {block.output.where} shows\n" + "\n".join(expected))
 
 
 def environment() -> dict[str, str]:
