@@ -37,7 +37,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PAGES = sorted((ROOT / "docs").rglob("*.md"))
+PAGES = sorted((ROOT / "docs").rglob("*.md")) + [ROOT / "README.md"]
 RUNNABLE = {"python", "bash", "console"}
 KNOWN = RUNNABLE | {"text", "toml"}
 KINDS = ("scenario", "suite", "space")
