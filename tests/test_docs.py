@@ -5,9 +5,11 @@ A page is run top to bottom in a fresh temporary folder, each block in document 
 * a ``python`` block runs in a fresh interpreter; ``<!-- test: continue -->`` before a python block appends it to
   the previous python block's script (the two run as one script, each printing what its own output block shows);
 * a ``bash`` (or ``console``) block runs in ``bash -euo pipefail`` with simrig's environment on the ``PATH``;
-* an output block is the ``text`` block that follows a runnable block (the next fenced block): the runnable
+* an output block is the ``text`` block that follows a runnable block (the next fenced block), or a ``text`` block
+  marked ``<!-- test: output-of N -->``, the output of the page's N-th fenced block (counting from 1): the runnable
   block's standard output must be exactly that, line by line (trailing spaces ignored). ``...`` inside a line
-  matches any text (a time, an absolute path); a line that is only ``...`` matches any number of lines;
+  matches any text (a time, an absolute path); a line that is only ``...`` matches any number of lines. An output
+  block of a block that does not run (skipped) is an error: what a page shows is what ran;
 * a ``toml`` block must parse; with ``<!-- test: file PATH [scenario|suite|space] -->`` it is written to PATH in the
   page's folder (and validated as that kind of file), where later blocks use it; ``file`` works on any block.
 
@@ -63,12 +65,15 @@ class Block:
     covered_by: str | None = None
     exit: int = 0
     stderr: bool = False
+    output_of: int | None = None  # a text block: the 1-based index of the page's block whose output it shows
+    owner: Block | None = None  # a text block: the block whose output it shows
     output: Block | None = None  # the text block showing what this block prints
     is_output: bool = False
 
     @property
     def where(self) -> str:
-        return f"{self.page.relative_to(ROOT)}:{self.line}"
+        page = self.page.relative_to(ROOT) if self.page.is_relative_to(ROOT) else self.page
+        return f"{page}:{self.line}"
 
     @property
     def runs(self) -> bool:
@@ -98,6 +103,8 @@ def parse_directive(body: str, block: Block) -> None:
             block.exit = int(words.pop(0))
         elif word == "stderr":
             block.stderr = True
+        elif word == "output-of" and words and words[0].isdigit():
+            block.output_of = int(words.pop(0))
         else:
             raise ValueError(f"{block.where}: unknown test directive {body!r}")
 
@@ -135,9 +142,15 @@ def blocks_of(page: Path) -> list[Block]:
             parse_directive(text, block)
         pending = []
         found.append(block)
+    for block in found:
+        if block.lang == "text" and block.output_of is not None and 1 <= block.output_of <= len(found):
+            owner = found[block.output_of - 1]
+            if owner.lang in RUNNABLE and owner.output is None:
+                owner.output, block.owner, block.is_output = block, owner, True
     for before, after in zip(found, found[1:], strict=False):
-        if after.lang == "text" and before.lang in RUNNABLE and not before.is_output:
-            before.output, after.is_output = after, True
+        if (after.lang == "text" and after.output_of is None and before.lang in RUNNABLE and not before.is_output
+                and before.output is None):
+            before.output, after.owner, after.is_output = after, before, True
     return found
 
 
@@ -149,6 +162,10 @@ def check_page(blocks: list[Block]) -> list[str]:
             problems.append(f"{block.where}: a ```{block.lang or '(no language)'} block; use one of {sorted(KNOWN)}")
         if block.lang == "text" and not block.is_output and block.file is None:
             problems.append(f"{block.where}: a text block that is no runnable block's output")
+        if block.owner is not None and block.owner.skip is not None:
+            problems.append(f"{block.where}: shows the output of {block.owner.where}, which is skipped")
+        if block.output_of is not None and block.owner is None:
+            problems.append(f"{block.where}: output-of {block.output_of} names no runnable block without output")
         if block.lang == "toml":
             try:
                 tomllib.loads(block.code)
@@ -306,6 +323,18 @@ SKIPPED = [block for page in PAGES for block in blocks_of(page) if block.skip is
 @pytest.mark.parametrize("block", SKIPPED, ids=lambda block: block.where)
 def test_skipped_blocks_say_why(block: Block) -> None:
     pytest.skip(f"{block.where}: {block.skip}")
+
+
+def test_an_output_block_belongs_to_a_block_that_runs(tmp_path: Path) -> None:
+    """``output-of N`` links a text block to an earlier block; output shown for a skipped block is an error."""
+    page = tmp_path / "page.md"
+    page.write_text("```bash\necho a\n```\n\n<!-- test: skip no -->\n```bash\necho b\n```\n\n"
+                    "<!-- test: output-of 1 -->\n```text\na\n```\n\n<!-- test: skip no -->\n```bash\necho c\n```\n\n"
+                    "```text\nc\n```\n", encoding="utf-8")
+    blocks = blocks_of(page)
+    assert blocks[0].output is blocks[2] and blocks[3].output is blocks[4] and blocks[1].output is None
+    assert check_page(blocks) == [f"{blocks[4].where}: shows the output of {blocks[3].where}, which is skipped"]
+    assert run_page(page, tmp_path, slow=False) == 1
 
 
 def test_the_matcher() -> None:
