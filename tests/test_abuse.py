@@ -1,6 +1,6 @@
 """Safe under abuse: what a hostile or careless input can and cannot make simrig do.
 
-Each case runs the command line as a user would and checks the promise it tests (README, "Safe under abuse"):
+Each case runs the command line as a user would and checks the promise it tests (docs/safety.md, "Safe under abuse"):
 nothing imported that was not trusted, nothing written outside the folder the user named, nothing written
 through a link, no hang (every subprocess runs under a timeout), and the refusal is one line
 ``simrig: error: ...`` with exit status 2.

@@ -1,4 +1,5 @@
-"""No module imports from a layer above its own (README, "Layers"): read every import of every module.
+"""No module imports from a layer above its own (docs/architecture.md, "Layout and layers"): read every import of
+every module.
 
 Imports inside functions count too: a lazy import is still a dependency.
 """
@@ -197,15 +198,15 @@ def test_the_cycle_finder_finds_a_cycle_through_a_function_level_import(tmp_path
 
 
 def _documented_layers() -> list[tuple[str, str]]:
-    """(layer name, its paragraph) of the README's numbered layer list, bottom first."""
+    """(layer name, its paragraph) of the numbered layer list in docs/architecture.md, bottom first."""
     import re
 
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
     found = re.findall(r"^\s*\d+\. \*\*([a-z ]+)\*\* — (.*?)(?=^\s*\d+\. \*\*|^\S|\Z)", text, flags=re.M | re.S)
     return [(name, " ".join(paragraph.split())) for name, paragraph in found]
 
 
-def test_the_layer_map_in_the_readme_is_the_tests() -> None:
+def test_the_layer_map_in_the_docs_is_the_tests() -> None:
     documented = _documented_layers()
     assert [name for name, _ in documented] == list(LAYERS)
     known = modules()

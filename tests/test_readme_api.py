@@ -1,4 +1,5 @@
-"""The README's "Python API" example runs as written, in a fresh interpreter in an empty folder."""
+"""The README's "Python API" example runs as written, in a fresh interpreter in an empty folder, and prints what
+the README shows; docs/test-your-tracker.md shows the same example and output."""
 
 from __future__ import annotations
 
@@ -7,12 +8,20 @@ import subprocess
 import sys
 from pathlib import Path
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+PAGE = ROOT / "docs" / "test-your-tracker.md"
+
+
+def example(text: str, heading: str) -> tuple[str, str]:
+    """The python block under ``heading`` and the text block after it (what it prints)."""
+    section = text.split(heading, 1)[1].split("\n## ", 1)[0]
+    code, printed = re.search(r"```python\n(.*?)```\s*```text\n(.*?)```", section, re.S).groups()
+    return code, printed
 
 
 def api_example() -> str:
-    section = README.read_text(encoding="utf-8").split("## Python API", 1)[1].split("\n## ", 1)[0]
-    return re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    return example(README.read_text(encoding="utf-8"), "## Python API")[0]
 
 
 def test_the_python_api_example_runs_and_prints_scores(tmp_path: Path) -> None:
@@ -26,6 +35,13 @@ def test_the_python_api_example_runs_and_prints_scores(tmp_path: Path) -> None:
     hota, amota = map(float, re.fullmatch(r"HOTA (\S+)  AMOTA (\S+)\n", result.stdout).groups())
     assert 0.0 < hota <= 1.0 and 0.0 < amota <= 1.0
     assert (tmp_path / "runs" / "api-demo" / "manifest.json").is_file()
+    assert result.stdout == example(README.read_text(encoding="utf-8"), "## Python API")[1]  # deterministic per seed
+
+
+def test_the_docs_show_the_readme_s_example_and_output() -> None:
+    """docs/test-your-tracker.md's block is marked as run here: it must be this very example."""
+    assert example(PAGE.read_text(encoding="utf-8"), "## Your tracker, from Python") == \
+        example(README.read_text(encoding="utf-8"), "## Python API")
 
 
 def test_import_simrig_loads_nothing_heavy_and_exports_what_all_says() -> None:

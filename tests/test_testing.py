@@ -153,7 +153,8 @@ from broken_tracker import DropsAfterOcclusion
 
 
 def keeps_recall(tracker, scenario):
-    """The README's property: the tracker matches at least half of the scored boxes its detector delivered."""
+    """The property of docs/test-your-tracker.md: the tracker matches at least half of the scored boxes its
+    detector delivered."""
     report = run_tracker(tracker, scenario)
     overall, truth = report.metrics2d["overall"], report.metrics2d["ground_truth"]["overall"]
     assert overall["CLR_TP"] >= 0.5 * truth["delivered"], "recall below one half"

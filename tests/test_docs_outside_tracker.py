@@ -1,5 +1,5 @@
-"""The README's "Wrapping an outside 2D tracker" example runs as written in an empty folder, and its wrapper is
-at most 40 lines."""
+"""The "Wrapping an outside 2D tracker" example of docs/test-your-tracker.md runs as written in an empty folder,
+prints what the page shows, and its wrapper is at most 40 lines."""
 
 from __future__ import annotations
 
@@ -8,16 +8,18 @@ import subprocess
 import sys
 from pathlib import Path
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+PAGE = Path(__file__).resolve().parents[1] / "docs" / "test-your-tracker.md"
 
 
-def example() -> str:
-    section = README.read_text(encoding="utf-8").split("### Wrapping an outside 2D tracker", 1)[1].split("\n#", 1)[0]
-    return re.search(r"```python\n(.*?)```", section, re.S).group(1)
+def example() -> tuple[str, str]:
+    """The section's python block and the text block that shows what it prints."""
+    section = PAGE.read_text(encoding="utf-8").split("## A 2D tracker, one camera at a time", 1)[1].split("\n## ", 1)[0]
+    code, printed = re.search(r"```python\n(.*?)```\s*```text\n(.*?)```", section, re.S).groups()
+    return code, printed
 
 
 def test_the_outside_tracker_example_runs_and_scores(tmp_path: Path) -> None:
-    code = example()
+    code, printed = example()
     wrapper = code[code.index("class Wrapped"):]
     assert len(wrapper.splitlines()) <= 40
     code += ("\nassert len(run.tracks.tracks2d) > 0 and run.tracks.tracks3d is None\n"
@@ -26,3 +28,4 @@ def test_the_outside_tracker_example_runs_and_scores(tmp_path: Path) -> None:
     assert result.returncode == 0, result.stderr[-3000:]
     hota, switches = map(float, re.fullmatch(r"HOTA (\S+)  IDSW (\S+)\n", result.stdout).groups())
     assert 0.0 < hota <= 1.0 and switches >= 0
+    assert result.stdout == printed  # the page shows what it prints (deterministic per seed)
