@@ -57,7 +57,8 @@ def test_view_without_rerun_says_how_to_install_it(tmp_path, capsys, monkeypatch
     monkeypatch.setitem(sys.modules, "rerun", None)
     assert main(["view", str(tmp_path), "--save", str(tmp_path / "v.rrd")]) == 2
     err = capsys.readouterr().err
-    assert err == "simrig: error: the viewer needs rerun-sdk: pip install 'simrig-mot[view]' (or pip install rerun-sdk)\n"
+    assert err == ("simrig: error: the viewer needs rerun-sdk: pip install 'simrig-mot[view]' "
+                   "(or pip install rerun-sdk)\n")
 
 
 def test_view_without_a_display_says_to_save(tmp_path, capsys, monkeypatch):
