@@ -33,6 +33,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from published import publish  # tests/perf helpers
+
 TESTS = Path(__file__).resolve().parents[1]
 REPORT = TESTS.parent / "reports" / "perf" / "score_first_call.md"
 COMPARED = ("HOTA", "DetA", "AssA", "MOTA", "IDSW", "IDF1")
@@ -59,6 +61,7 @@ def main() -> None:
 
     sys.path.insert(0, str(TESTS))
     from motchallenge_case import write_case
+
 
     root = Path(tempfile.mkdtemp(prefix="score-first-call-"))
     _, data = write_case(root / "mot", sequences=(("MOT17-02", args.frames, args.people),))
@@ -132,11 +135,7 @@ def main() -> None:
         f"front door's scoring path importing: {', '.join(loaded) if loaded else 'none'}.",
         "",
     ]
-    text = "\n".join(lines)
-    print(text)
-    REPORT.parent.mkdir(parents=True, exist_ok=True)
-    REPORT.write_text(text)
-    print(f"wrote {REPORT}")
+    publish(lines, REPORT)
 
 
 if __name__ == "__main__":
