@@ -346,3 +346,27 @@ def test_the_scorers_hungarian_is_scipys_without_its_package_import():
             "linear_sum_assignment(np.eye(3))\nprint('scipy.optimize' in sys.modules)\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.stdout.strip() == "False", done.stderr[-2000:]
+
+
+@pytest.mark.parametrize("layout", ["module", "package", "namespace package"])
+def test_the_replay_lines_pythonpath_is_the_folder_the_tracker_was_imported_from(layout, tmp_path, monkeypatch):
+    """``mypkg/tracker.py`` without ``__init__.py`` (a namespace package, as the docs' example has it), with one,
+    and a plain module: the folder to put on PYTHONPATH is the one holding ``mypkg`` (or the module)."""
+    import importlib
+
+    from simrig.testing.plugin import _import_root
+
+    if layout == "module":
+        (tmp_path / "solo_tracker.py").write_text("class T:\n    pass\n")
+        name = "solo_tracker"
+    else:
+        package = tmp_path / f"pkg_{layout.replace(' ', '_')}"
+        package.mkdir()
+        if layout == "package":
+            (package / "__init__.py").write_text("")
+        (package / "tracker.py").write_text("class T:\n    pass\n")
+        name = f"{package.name}.tracker"
+    monkeypatch.syspath_prepend(str(tmp_path))
+    importlib.import_module(name)
+    assert _import_root(f"{name}:T") == tmp_path.resolve()
+    assert _import_root("simrig.trackers.saga:saga") is None  # installed (or the checkout): no PYTHONPATH

@@ -97,17 +97,20 @@ def pytest_runtest_makereport(item, call):
 
 
 def _import_root(spec: str) -> Path | None:
-    """The folder a ``module:attribute`` tracker's top-level package or module was imported from, when that is
-    not where installed packages live (a project folder pytest put on ``sys.path``); ``None`` otherwise."""
+    """The folder on ``sys.path`` that a ``module:attribute`` tracker's module was imported from, when that is
+    not where installed packages live (a project folder pytest or ``PYTHONPATH`` put on the path); ``None``
+    otherwise. Works for a plain module, a package and a namespace package (a folder without ``__init__.py``)."""
     import sys
     import sysconfig
 
-    top = sys.modules.get(spec.partition(":")[0].partition(".")[0])
-    origin = getattr(getattr(top, "__spec__", None), "origin", None)
-    if not origin:
+    name = spec.partition(":")[0]
+    origin = getattr(getattr(sys.modules.get(name), "__spec__", None), "origin", None)
+    if not origin or not Path(origin).is_file():
         return None
     path = Path(origin).resolve()
-    root = path.parent.parent if path.name == "__init__.py" else path.parent
+    root = path.parent  # the module's folder, then one level up per dot (and one more for a package)
+    for _ in range(name.count(".") + (path.name == "__init__.py")):
+        root = root.parent
     installed = {Path(sysconfig.get_paths()[key]).resolve() for key in ("purelib", "platlib", "stdlib")}
-    return None if root in installed else root
-
+    on_path = {Path(entry or ".").resolve() for entry in sys.path}  # found through a path entry, not a finder hook
+    return root if root in on_path and root not in installed else None
