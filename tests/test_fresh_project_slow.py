@@ -61,7 +61,7 @@ def test_a_user_project_with_its_own_tracker_and_scenarios_modules(tmp_path: Pat
     wheels = tmp_path / "wheels"
     subprocess.run([python, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(wheels), str(REPOSITORY)],
                    check=True, timeout=600, capture_output=True)
-    (wheel,) = wheels.glob("simrig-*.whl")
+    (wheel,) = wheels.glob("simrig_mot-*.whl")
     subprocess.run([python, "-m", "pip", "install", "-q", f"{wheel}[testing]", "pytest"], check=True,
                    timeout=1500, capture_output=True)
     project = tmp_path / "project"
