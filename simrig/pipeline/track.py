@@ -67,9 +67,13 @@ def build_tracker(name, params: dict | None = None):
                 raise TrackingError(f"tracker {name!r}: parameters {sorted(params)} given for a tracker object")
             return name
         try:
-            check_param_types(getattr(name, "__qualname__", repr(name)), inspect.signature(name), params)
-        except (TypeError, ValueError) as error:  # TypeError, ValueError: a callable without a signature
-            if isinstance(error, ValueError) and str(error).startswith("tracker "):
+            signature = inspect.signature(name)
+        except (TypeError, ValueError):  # a callable without a signature: the call below judges the parameters
+            signature = None
+        if signature is not None:
+            try:
+                check_param_types(getattr(name, "__qualname__", repr(name)), signature, params)
+            except ValueError as error:
                 raise TrackingError(str(error)) from None
         try:
             built = name(**params)
