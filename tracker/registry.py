@@ -47,16 +47,21 @@ def registered_here(name: str) -> str | None:
 def register_again(name: str, reference: str) -> None:
     """In another process, register ``name`` as the factory at ``reference`` (``module:qualname``, from
     :func:`registered_here`), unless the name is already known there."""
+    _load_entry_points()
+    if name not in _FACTORIES:
+        _FACTORIES[name] = imported(reference)
+
+
+def imported(reference: str):
+    """The object ``"package.module:Attribute.path"`` names, its module imported (``ImportError``,
+    ``AttributeError`` or ``ValueError`` when it cannot be)."""
     import importlib
 
-    _load_entry_points()
-    if name in _FACTORIES:
-        return
-    module, _, qualname = reference.partition(":")
+    module, _, attribute = reference.partition(":")
     target = importlib.import_module(module)
-    for part in qualname.split("."):
+    for part in attribute.split("."):
         target = getattr(target, part)
-    _FACTORIES[name] = target
+    return target
 
 
 def _load_entry_points() -> None:

@@ -13,12 +13,12 @@ class with ``reset`` and ``step`` methods, or a Python function whose return ann
 
 from __future__ import annotations
 
-import importlib
 import inspect
 import typing
 from pathlib import Path
 
 import simrig.trackers as tracker_registry
+from simrig.trackers.registry import imported
 
 from ..errors import SimrigError
 
@@ -86,9 +86,7 @@ def import_tracker_factory(spec: str):
     if not module_name or not attribute:
         raise TrackerReferenceError(f"tracker {spec!r}: expected module:attribute")
     try:
-        target = importlib.import_module(module_name)
-        for part in attribute.split("."):
-            target = getattr(target, part)
+        target = imported(spec)
     except (ImportError, AttributeError, ValueError) as error:
         hint = ""
         if isinstance(error, ModuleNotFoundError) and _in_working_folder(module_name):
