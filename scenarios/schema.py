@@ -189,6 +189,24 @@ class Scenario(Strict):
                                  f"frame ({self.frames - 1}) of the run, so it would never take effect")
         return self
 
+    @model_validator(mode="after")
+    def _check_timing(self) -> Scenario:
+        """Capture offsets fit in a frame period; a fixed latency shorter than the run (or nothing ever arrives)."""
+        capture, latency, period = self.sensor.capture, self.sensor.latency, self.frame_period_s
+        latest = max([capture.spread_s, *capture.offsets_s.values()]) + 3.0 * capture.jitter_s
+        if latest >= period:
+            key = ("jitter_s" if capture.jitter_s and latest - 3.0 * capture.jitter_s < period
+                   else "offsets_s" if capture.trigger == "given" else "spread_s")
+            raise ValueError(f"sensor.capture.{key}: the last capture of a frame would come {latest:g} s after its "
+                             f"tick (offset + 3 σ of jitter), not within the frame period ({period:g} s)")
+        run = self.frames * period
+        for key, delay in [("fixed_s", latency.fixed_s)] + [
+                (f"by_camera_s.{name}", latency.fixed_s + value) for name, value in latency.by_camera_s.items()]:
+            if delay >= run:
+                raise ValueError(f"sensor.latency.{key}: a latency of {delay:g} s is longer than the run "
+                                 f"({self.frames} frames, {run:g} s): no detection would ever arrive")
+        return self
+
 
 def windows_outside(scenario: Scenario, frames: int) -> list[str]:
     """Perturbations of ``scenario`` whose window does not fit in the ``frames`` generated (a ``--frames``

@@ -7,9 +7,10 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_serializer, model_validator
 
 from .base import FiniteFloat, NonNegativeFloat, PositiveFloat, Strict
+from .timing_schema import TIMING_TABLES, CaptureConfig, EgoPoseConfig, LatencyConfig
 
 Fraction = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
 
@@ -280,6 +281,23 @@ class SensorConfig(Strict):
     ghosts: GhostConfig = Field(default_factory=GhostConfig)
     duplicates: DuplicateConfig = Field(default_factory=DuplicateConfig)
     confusion: ConfusionConfig = Field(default_factory=ConfusionConfig)
+    capture: CaptureConfig = Field(default_factory=CaptureConfig)
+    """When each camera fires (:mod:`.timing_schema`)."""
+    latency: LatencyConfig = Field(default_factory=LatencyConfig)
+    """When detections reach the tracker (:mod:`.timing_schema`)."""
+    ego_pose: EgoPoseConfig = Field(default_factory=EgoPoseConfig)
+    """The error of the ego pose a tracker is given (:mod:`.timing_schema`)."""
+
+    @model_serializer(mode="wrap")
+    def _without_ideal_timing(self, handler):
+        """The dump leaves out a timing table at its defaults (the ideal rig), so a scenario without timing
+        settings stores what it stored before the tables existed (same manifest, same content keys)."""
+        dumped = handler(self)
+        if isinstance(dumped, dict):
+            for name, model in TIMING_TABLES.items():
+                if name in dumped and getattr(self, name) == model():
+                    del dumped[name]
+        return dumped
 
     @field_validator("preset")
     @classmethod

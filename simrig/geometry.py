@@ -216,12 +216,44 @@ def project_boxes(boxes: np.ndarray, rig: Rig, ego: EgoPose) -> Projection:
     return _project_boxes_from(boxes, rig, camera_from_world(rig, ego)[:, None])
 
 
-def project_boxes_at(boxes: np.ndarray, rig: Rig, egos: list[EgoPose], pose_of_box: np.ndarray) -> Projection:
+def project_boxes_at(boxes: np.ndarray, rig: Rig, egos: list[EgoPose], pose_of_box: np.ndarray,
+                     offsets: np.ndarray | None = None) -> Projection:
     """:func:`project_boxes` for boxes of several frames at once: box ``i`` seen from ego pose
-    ``egos[pose_of_box[i]]`` — the same numbers as one :func:`project_boxes` call per pose."""
-    world_from_ego = np.stack([ego.world_from_ego() for ego in egos])  # (F, 4, 4)
-    transforms = np.linalg.inv(world_from_ego[:, None] @ _ego_from_cameras(rig))  # (F, C, 4, 4)
-    return _project_boxes_from(boxes, rig, np.swapaxes(transforms[pose_of_box], 0, 1))
+    ``egos[pose_of_box[i]]`` — the same numbers as one :func:`project_boxes` call per pose. ``offsets``
+    ``(F, C)`` [s]: camera ``c`` of pose ``f`` fires that long after the pose's time; the ego and each box move
+    on at their velocities until then (:func:`project_boxes_per_camera`)."""
+    if offsets is None:
+        world_from_ego = np.stack([ego.world_from_ego() for ego in egos])  # (F, 4, 4)
+        transforms = np.linalg.inv(world_from_ego[:, None] @ _ego_from_cameras(rig))  # (F, C, 4, 4)
+        return _project_boxes_from(boxes, rig, np.swapaxes(transforms[pose_of_box], 0, 1))
+    boxes = np.asarray(boxes, dtype=float)
+    delta = np.asarray(offsets, dtype=float)[pose_of_box].T  # (C, N) [s]
+    moved = [[EgoPose(e.x + e.vx * float(d), e.y + e.vy * float(d), e.z, e.yaw, e.vx, e.vy) for d in row]
+             for e, row in zip(egos, offsets, strict=True)]
+    world_from_ego = np.array([[ego.world_from_ego() for ego in row] for row in moved]).reshape(len(egos), -1, 4, 4)
+    transforms = np.linalg.inv(world_from_ego @ _ego_from_cameras(rig))  # (F, C, 4, 4)
+    transforms = np.swapaxes(transforms[pose_of_box], 0, 1).copy()  # (C, N, 4, 4)
+    shifts = np.zeros((*delta.shape, 3))
+    shifts[..., :2] = np.nan_to_num(boxes[None, :, 7:9]) * delta[..., None]
+    transforms[..., :3, 3] += np.einsum("cnij,cnj->cni", transforms[..., :3, :3], shifts)
+    return _project_boxes_from(boxes, rig, transforms)
+
+
+def cameras_from_world_at(rig: Rig, egos: list[EgoPose]) -> np.ndarray:
+    """``(C, 4, 4)``: camera ``c``'s world → OpenCV transform with the ego at ``egos[c]`` (each camera seen at
+    its own capture time)."""
+    world_from_ego = np.stack([ego.world_from_ego() for ego in egos])  # (C, 4, 4)
+    return np.linalg.inv(world_from_ego @ _ego_from_cameras(rig))
+
+
+def project_boxes_per_camera(boxes: np.ndarray, rig: Rig, egos: list[EgoPose], shifts: np.ndarray) -> Projection:
+    """:func:`project_boxes` with each camera ``c`` on the ego at ``egos[c]`` and seeing box ``n`` moved by
+    ``shifts[c, n]`` ``(C, N, 3)`` [m, world frame] — the boxes of one frame at every camera's capture time
+    (moving a box by Δ before projecting it equals moving the camera by −Δ: one transform per camera and box)."""
+    shifts = np.asarray(shifts, dtype=float)
+    transforms = np.broadcast_to(cameras_from_world_at(rig, egos)[:, None], (*shifts.shape[:2], 4, 4)).copy()
+    transforms[..., :3, 3] += np.einsum("cnij,cnj->cni", transforms[..., :3, :3], shifts)
+    return _project_boxes_from(boxes, rig, transforms)
 
 
 def _project_boxes_from(boxes: np.ndarray, rig: Rig, transforms: np.ndarray) -> Projection:

@@ -18,6 +18,9 @@ STREAM_KEYS: dict[str, int] = {
     "sensor": 2,  # per sensor effect and camera: (effect key, camera index)
     "embeddings": 3,  # per actor id: its identity embedding
     "perturbations": 4,  # per perturbation and frame: e.g. whether a frame is dropped
+    "capture": 5,  # capture-time jitter, per camera and frame
+    "latency": 6,  # random detection latency, per camera and frame
+    "ego_pose": 7,  # the ego-pose estimate's noise and drift, per frame
 }
 """Spawn key of each named stream. Append new names with new numbers; never renumber."""
 

@@ -253,13 +253,17 @@ class GroundTruthFrame:
 class Detection:
     """One detection from one camera: pixel ``box``, confidence ``score`` in [0, 1], class ``label``,
     optionally a monocular 3D estimate ``box3d`` in the world frame and an appearance ``embedding``
-    (unit vector). Carries no ground-truth id."""
+    (unit vector). Carries no ground-truth id. ``capture_time`` [s]: when its camera took the image, as the
+    camera reports it (None: at the frame's timestamp); ``late``: it was captured in an earlier frame and
+    arrived after that frame's step."""
 
     box: Box2D
     score: float
     label: ActorClass
     box3d: Box3D | None = None
     embedding: np.ndarray | None = None
+    capture_time: float | None = None
+    late: bool = False
 
 
 LABELS: tuple[ActorClass, ...] = tuple(ActorClass)
@@ -275,7 +279,9 @@ class DetectionArrays:
     detection has no 3D estimate; boxes2d: ``(M, 4)`` pixel boxes [px]; scores: ``(M,)`` in [0, 1];
     labels: ``(M,)`` int codes into :data:`LABELS`; cameras: ``(M,)`` int index of the camera in the rig;
     embeddings: ``(M, D)`` appearance unit vectors, a row of NaN where a detection has none (``D`` = 0 when
-    none has one).
+    none has one); capture_times: ``(M,)`` [s] when each detection's image was taken, as its camera reports it
+    (NaN: at the frame's timestamp, which is what a dataset of a synchronous rig gives); late: ``(M,)`` bool,
+    captured in an earlier frame and delivered now (:mod:`simrig.scenarios.timing_schema`).
     """
 
     boxes3d: np.ndarray
@@ -284,11 +290,18 @@ class DetectionArrays:
     labels: np.ndarray
     cameras: np.ndarray
     embeddings: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=np.float32))
+    capture_times: np.ndarray | None = None
+    late: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        if len(self.embeddings) != len(self.scores):
-            object.__setattr__(self, "embeddings", np.full((len(self.scores), 0), np.nan, dtype=np.float32))
-        for name in ("boxes3d", "boxes2d", "scores", "labels", "cameras", "embeddings"):
+        m = len(self.scores)
+        if len(self.embeddings) != m:
+            object.__setattr__(self, "embeddings", np.full((m, 0), np.nan, dtype=np.float32))
+        if self.capture_times is None or len(self.capture_times) != m:
+            object.__setattr__(self, "capture_times", np.full(m, np.nan))
+        if self.late is None or len(self.late) != m:
+            object.__setattr__(self, "late", np.zeros(m, dtype=bool))
+        for name in ("boxes3d", "boxes2d", "scores", "labels", "cameras", "embeddings", "capture_times", "late"):
             getattr(self, name).setflags(write=False)  # a tracker cannot change what the next one sees
 
     def __len__(self) -> int:
@@ -298,7 +311,7 @@ class DetectionArrays:
         """The detections at ``rows`` (an index or boolean array), in that order."""
         return DetectionArrays(
             self.boxes3d[rows], self.boxes2d[rows], self.scores[rows], self.labels[rows], self.cameras[rows],
-            self.embeddings[rows],
+            self.embeddings[rows], self.capture_times[rows], self.late[rows],
         )
 
     @staticmethod
@@ -319,6 +332,8 @@ class DetectionArrays:
                 label=LABELS[self.labels[row]],
                 box3d=Box3D(*self.boxes3d[row].tolist()) if has_3d[row] else None,
                 embedding=self.embeddings[row] if has_embedding[row] else None,
+                capture_time=float(self.capture_times[row]) if np.isfinite(self.capture_times[row]) else None,
+                late=bool(self.late[row]),
             ))
         return {name: tuple(items) for name, items in out.items()}
 

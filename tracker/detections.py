@@ -32,7 +32,7 @@ def detection_arrays(frame: SensorFrame, *, require_3d: bool = True) -> Detectio
     unknown = sorted(set(frame.detections) - set(names))
     if unknown:
         raise TrackerInputError(f"frame {frame.frame}: detections from camera {unknown[0]!r}, not in rig {names}")
-    boxes3d, boxes2d, scores, labels, cameras, embeddings = [], [], [], [], [], []
+    boxes3d, boxes2d, scores, labels, cameras, embeddings, times, late = [], [], [], [], [], [], [], []
     for camera_index, name in enumerate(names):
         for index, detection in enumerate(frame.detections.get(name, ())):
             where = f"frame {frame.frame}, camera {name!r}, detection {index}"
@@ -52,6 +52,11 @@ def detection_arrays(frame: SensorFrame, *, require_3d: bool = True) -> Detectio
                 raise TrackerInputError(f"{where}: unknown label {detection.label!r}") from None
             cameras.append(camera_index)
             embeddings.append(detection.embedding)
+            time = detection.capture_time
+            if time is not None and not np.isfinite(time):
+                raise TrackerInputError(f"{where}: capture_time is {time} (a time in seconds, or None)")
+            times.append(np.nan if time is None else float(time))
+            late.append(bool(detection.late))
     if not scores:
         return DetectionArrays.empty()
     out = DetectionArrays(
@@ -61,6 +66,8 @@ def detection_arrays(frame: SensorFrame, *, require_3d: bool = True) -> Detectio
         np.asarray(labels, dtype=np.int64),
         np.asarray(cameras, dtype=np.int64),
         _embedding_rows(frame, embeddings, cameras),
+        np.asarray(times, dtype=float),
+        np.asarray(late, dtype=bool),
     )
     _check_finite(frame, out, require_3d)
     return out

@@ -5,6 +5,14 @@ owner`` from :mod:`.assignment` or :mod:`.fota`), the life rule (:mod:`.life`). 
 frame, so the ego's motion needs no compensation (MUTR3D's Eq. 7 reference-point update is the identity
 here); the time step is the real one, from the frames' timestamps [s].
 
+Motion compensation: a detection taken at its camera's capture time, not at the frame's (trigger offsets, late
+delivery: :mod:`simrig.scenarios.timing_schema`), is compared with each track predicted to that capture time
+(centre + v·δ, δ = capture time − frame time, the track's own velocity), and updates the track as the
+measurement moved back to the frame time with the track's velocity; a track born from it starts at its centre
+moved with the detection's own velocity. ``motion_compensation=False`` treats every detection as taken at the
+frame's time, to measure what ignoring the timing costs. Detections without a capture time (a synchronous rig)
+take the plain path.
+
 Fusion: when several detections are assigned to one track (FOTA, one object seen by two cameras) they are
 applied as sequential Kalman updates, highest score first. With independent measurement noise this equals
 one update with the stacked measurements (the information-filter sum), needs no new equations on top of
@@ -63,7 +71,8 @@ class KalmanTracker:
     birth_merge_m: unmatched detections of one class from different cameras whose centres are within this
     distance [m] start one track, not several (0 disables: every unmatched detection starts its own track);
     duplicate_iou: two tracks of one class whose footprints overlap by at least this bird's-eye-view IoU are
-    one object (two vehicles cannot share road): the one with fewer updates is dropped (0 disables).
+    one object (two vehicles cannot share road): the one with fewer updates is dropped (0 disables);
+    motion_compensation: predict tracks to each detection's capture time (module docstring).
     """
 
     def __init__(
@@ -76,8 +85,11 @@ class KalmanTracker:
         score_threshold: float = 0.0,
         birth_merge_m: float = 0.0,
         duplicate_iou: float = 0.0,
+        motion_compensation: bool = True,
     ):
         self.cost = cost
+        self.motion_compensation = bool(motion_compensation)
+        self._now: float | None = None
         self.assign = assign
         self.life = life if life is not None else HitsAndAge()
         self.kalman = kalman if kalman is not None else motion.KalmanConfig()
@@ -105,8 +117,22 @@ class KalmanTracker:
         """Consume one frame; return the tracks reported at it."""
         detections = self.select(detection_arrays(frame))
         dt = self.clock.advance(frame)
+        self._now = frame.timestamp
         self.step_arrays(detections, dt)
         return [track.output() for track in self.tracks if self.life.is_reported(track.life)]
+
+    def capture_offsets(self, detections: DetectionArrays) -> np.ndarray:
+        """(M,) [s] each detection's capture time minus the frame's time: 0 where it has none, and for every
+        detection without motion compensation."""
+        if not self.motion_compensation or self._now is None:
+            return np.zeros(len(detections))
+        offsets = detections.capture_times - self._now
+        return np.where(np.isfinite(offsets), offsets, 0.0)
+
+    @staticmethod
+    def _velocities(tracks: list[KalmanTrack]) -> np.ndarray:
+        """(N, 2) world-frame velocities [m/s] of ``tracks``' states."""
+        return np.array([track.model.velocity(track.kf.x[:, 0]) for track in tracks], dtype=float).reshape(-1, 2)
 
     # -- the steps -------------------------------------------------------------------------------------
     def select(self, detections: DetectionArrays) -> DetectionArrays:
@@ -138,7 +164,17 @@ class KalmanTracker:
             return np.zeros((n, m))
         predicted = np.stack([track.kf.x[:7, 0] for track in tracks])
         innovation = motion.innovation_covariances(np.stack([track.kf.P for track in tracks]), self.kalman)
-        cost = self.cost(predicted, innovation, detections.boxes3d)
+        offsets = self.capture_offsets(detections)
+        if not offsets.any():
+            cost = self.cost(predicted, innovation, detections.boxes3d)
+        else:  # each track predicted to each capture time: one cost block per distinct capture time
+            cost = np.empty((n, m))
+            velocities = self._velocities(tracks)
+            for offset in np.unique(offsets):
+                columns = offsets == offset
+                moved = predicted.copy()
+                moved[:, :2] += velocities * offset
+                cost[:, columns] = self.cost(moved, innovation, detections.boxes3d[columns])
         labels = np.array([track.label for track in tracks])
         return np.where(labels[:, None] == detections.labels[None, :], cost, np.inf)
 
@@ -152,12 +188,17 @@ class KalmanTracker:
         """Apply every assigned detection to its track (sequential updates, highest score first); returns the
         frame's score per updated track index (its best detection's score)."""
         scores: dict[int, float] = {}
+        offsets = self.capture_offsets(detections)
         for j in np.lexsort((np.arange(len(owner)), -detections.scores)):
             i = int(owner[j])
             if i == UNMATCHED:
                 continue
             track = self.tracks[i]
-            track.model.update(track.kf, detections.boxes3d[j, :7])
+            z = detections.boxes3d[j, :7]
+            if offsets[j]:  # the measurement moved back to the frame time with the track's velocity
+                z = z.copy()
+                z[:2] -= np.array(track.model.velocity(track.kf.x[:, 0])) * offsets[j]
+            track.model.update(track.kf, z)
             track.cameras.add(int(detections.cameras[j]))
             scores[i] = max(scores.get(i, 0.0), float(detections.scores[j]))
         return scores
@@ -198,10 +239,14 @@ class KalmanTracker:
         """Start tracks from unmatched detections, best score first; with ``birth_merge_m`` a detection from
         another camera near a track born this frame updates it instead of starting a duplicate."""
         newborn: list[KalmanTrack] = []
+        offsets = self.capture_offsets(detections)
         for j in np.lexsort((np.arange(len(owner)), -detections.scores)):
             if owner[j] != UNMATCHED or not self.life.may_start(float(detections.scores[j])):
                 continue
             box, camera, label = detections.boxes3d[j], int(detections.cameras[j]), int(detections.labels[j])
+            if offsets[j]:  # moved to the frame time with its own velocity
+                box = box.copy()
+                box[:2] -= np.nan_to_num(box[7:9]) * offsets[j]
             twin = self._birth_twin(newborn, box, camera, label)
             if twin is not None:
                 twin.model.update(twin.kf, box[:7])

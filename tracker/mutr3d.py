@@ -128,11 +128,13 @@ def mutr3d(
     score_threshold: float = 0.0,
     birth_merge_m: float = 3.0,
     measurement_variance: float = 1.0,
+    motion_compensation: bool = True,
 ) -> Mutr3dTracker:
     """MUTR3D-style projection tracker (module docstring). cost2d, gate2d: the per-camera cost (``mahalanobis``,
     ``iou``, ``centre``) and its gate; life: ``mutr3d`` (§3.4, default), ``mutr3d_code`` (public code) or ``hits``
     (then min_hits, max_age_s apply); birth_merge_m [m]: detections of one new object from two cameras start one track;
-    measurement_variance: the filter's R [m², rad²]."""
+    measurement_variance: the filter's R [m², rad²]; motion_compensation: tracks predicted to each detection's capture
+    time (:class:`~simrig.trackers.kalman_tracker.KalmanTracker`)."""
     return Mutr3dTracker(
         cost2d=cost2d,
         gate2d=gate2d,
@@ -140,4 +142,5 @@ def mutr3d(
         kalman=build_kalman(measurement_variance),
         score_threshold=float(score_threshold),
         birth_merge_m=float(birth_merge_m),
+        motion_compensation=bool(motion_compensation),
     )

@@ -97,6 +97,7 @@ class PolyMot(KalmanTracker):
     def step(self, frame: SensorFrame) -> list[Track]:
         detections = self.select(detection_arrays(frame))
         dt = self.clock.advance(frame)
+        self._now = frame.timestamp
         if dt > 0:
             self._dt = dt
         self.step_arrays(detections, dt)
@@ -127,13 +128,17 @@ def polymot(
     score_decay: float = 0.5,
     score_threshold: float = 0.01,
     measurement_variance: float = 1.0,
+    motion_compensation: bool = True,
 ) -> PolyMot:
     """The modern filter baseline (module docstring). gate, second_gate: the two stages' gates on the
     multi-cue cost; max_distance [m], heading_weight: the cost's pre-filter and heading cue; the rest as in the
-    module docstring and for ``saga``."""
+    module docstring and for ``saga``.
+    motion_compensation: tracks predicted to each detection's capture time (off: every detection taken at the
+    frame's time)."""
     return PolyMot(
         **kalman_tracker_parts(cost="multicue", gate=gate, life="hits", min_hits=min_hits, max_age_s=max_age_s,
                                measurement_variance=measurement_variance, score_threshold=score_threshold,
+                               motion_compensation=motion_compensation,
                                max_distance=float(max_distance), heading_weight=float(heading_weight)),
         nms_threshold=float(nms_threshold),
         score_high=float(score_high),

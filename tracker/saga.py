@@ -52,6 +52,7 @@ def saga(
     birth_merge_m: float = 3.0,
     duplicate_iou: float = 0.3,
     measurement_variance: float = 1.0,
+    motion_compensation: bool = True,
     one_per_camera: bool = True,
 ) -> SagaTrack:
     """SAGA-Track with FOTA. cost: a name from :data:`~simrig.trackers.cost_models.COST_MODELS`; gate: its gate
@@ -60,10 +61,13 @@ def saga(
     from two cameras start one track; duplicate_iou: tracks overlapping by this BEV IoU are one object, the
     younger is dropped; measurement_variance: the filter's R [m², rad²]; one_per_camera: a track takes at most
     one detection per camera per frame (physics: on by default; off reproduces unconstrained FOTA decoding).
-    ``birth_merge_m=0, duplicate_iou=0`` is pure FOTA (no birth merge, no duplicate rule)."""
+    ``birth_merge_m=0, duplicate_iou=0`` is pure FOTA (no birth merge, no duplicate rule).
+    motion_compensation: tracks predicted to each detection's capture time (off: every detection taken at the
+    frame's time)."""
     return SagaTrack(
         **kalman_tracker_parts(cost=cost, gate=gate, life=life, min_hits=min_hits, max_age_s=max_age_s,
-                               measurement_variance=measurement_variance, score_threshold=score_threshold),
+                               measurement_variance=measurement_variance, score_threshold=score_threshold,
+                               motion_compensation=motion_compensation),
         gamma=gamma, iterations=iterations, track_mass=track_mass, one_per_camera=one_per_camera,
         birth_merge_m=float(birth_merge_m),
         duplicate_iou=float(duplicate_iou),

@@ -32,10 +32,13 @@ def build_kalman(measurement_variance: float) -> KalmanConfig:
 
 
 def kalman_tracker_parts(*, cost: str, gate: float | None, life: str, min_hits: int, max_age_s: float,
-                         measurement_variance: float, score_threshold: float, **cost_extra) -> dict:
+                         measurement_variance: float, score_threshold: float, motion_compensation: bool = True,
+                         **cost_extra) -> dict:
     """Keyword arguments of :class:`~simrig.trackers.kalman_tracker.KalmanTracker` every reference tracker shares:
-    the cost model, the life rule, the filter settings and the score threshold."""
+    the cost model, the life rule, the filter settings, the score threshold and motion compensation (tracks
+    predicted to each detection's capture time)."""
     return {
+        "motion_compensation": bool(motion_compensation),
         "cost": _build_cost(cost, gate, **cost_extra),
         "life": build_life(life, min_hits=min_hits, max_age_s=max_age_s),
         "kalman": build_kalman(measurement_variance),

@@ -89,11 +89,15 @@ def simpletrack(
     max_age_s: float = 1.0,
     score_threshold: float = 0.01,
     measurement_variance: float = 1.0,
+    motion_compensation: bool = True,
 ) -> SimpleTrack:
-    """gate: on 1 − GIoU (1.5: GIoU ≥ −0.5); the rest as in the module docstring and for ``saga``."""
+    """gate: on 1 − GIoU (1.5: GIoU ≥ −0.5); the rest as in the module docstring and for ``saga``.
+    motion_compensation: tracks predicted to each detection's capture time (off: every detection taken at the
+    frame's time)."""
     return SimpleTrack(
         **kalman_tracker_parts(cost="giou3d", gate=gate, life=life, min_hits=min_hits, max_age_s=max_age_s,
-                               measurement_variance=measurement_variance, score_threshold=score_threshold),
+                               measurement_variance=measurement_variance, score_threshold=score_threshold,
+                               motion_compensation=motion_compensation),
         assign=hungarian,
         nms_threshold=float(nms_threshold),
         score_high=float(score_high),

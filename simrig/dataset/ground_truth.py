@@ -45,7 +45,9 @@ class GroundTruth:
     (0: nothing; 1 + an index into :data:`SOURCE_KINDS`: a distractor — a MOTChallenge distractor class, KITTI
     ``DontCare`` — or ground truth its benchmark does not evaluate), or ``None`` when it marks none.
     causes_known: ``False`` for imported ground truth, which records no sensor and so no causes (an error's
-    cause is then ``unknown``, never ``none``).
+    cause is then ``unknown``, never ``none``). capture_offsets: ``(F, C)`` [s] each camera's true capture time
+    minus its frame's tick, when the scenario sets capture timing (each camera's 2D ground truth is at its
+    capture time; the 3D ground truth at the tick), else ``None``.
 
     What exists only where the actor is in view is held for those ``V`` (row, camera) pairs alone, in
     row-major order (that of ``np.nonzero(in_view)``, the tables' own; a long run has most actors out of most
@@ -75,6 +77,7 @@ class GroundTruth:
     detected: np.ndarray
     source_ignored: np.ndarray | None = None
     causes_known: bool = True
+    capture_offsets: np.ndarray | None = None
 
     def view_index(self, rows: np.ndarray, camera: int) -> np.ndarray:
         """Index into the ``view_*`` arrays of each of ``rows`` in camera ``camera`` (rig order); a ``KeyError``
@@ -317,6 +320,7 @@ def load_ground_truth(dataset: Dataset) -> GroundTruth:
         detected=np.zeros((n, c), dtype=bool),
         source_ignored=_source_ignored(dataset, n, c),
         causes_known=dataset.causes_known,
+        capture_offsets=_capture_offsets(dataset, ego.column("timestamp").to_numpy(), c),
     )
     camera_of = {name: i for i, name in enumerate(cameras)}
     for sensor in dataset.batches("sensor_truth", ["frame", "camera", "actor_id", "detection", "causes"]):
@@ -331,6 +335,18 @@ def load_ground_truth(dataset: Dataset) -> GroundTruth:
     return ground_truth
 
 
+def _capture_offsets(dataset: Dataset, timestamps: np.ndarray, cameras: int) -> np.ndarray | None:
+    """``(F, C)`` [s] true capture time − tick of every frame and camera, from the ``captures`` table (rows by
+    frame, then camera in rig order); ``None`` for a dataset without one."""
+    if not dataset.has_table("captures"):
+        return None
+    times = dataset.columns("captures", ["capture_time"]).column("capture_time").to_numpy()
+    if len(times) != len(timestamps) * cameras:
+        raise DatasetError(f"dataset {str(dataset.path)!r}: captures holds {len(times)} rows, not one per frame "
+                           f"and camera ({len(timestamps)} × {cameras})")
+    return times.reshape(len(timestamps), cameras) - timestamps[:, None]
+
+
 def load_depth(dataset: Dataset) -> np.ndarray:
     """``(R, C)`` camera-frame depth [m] of every (frame, actor) row of the ground truth in every camera (rig
     order), read a row group at a time: what :class:`GroundTruth` does not hold."""
@@ -341,8 +357,10 @@ def load_depth(dataset: Dataset) -> np.ndarray:
 def project_tracks(truth: GroundTruth, tracks3d: TrackRows, *, chunk_frames: int = 256) -> TrackRows:
     """2D rows of 3D tracks: each box projected into every camera at its frame's ego pose with the ground
     truth's geometry (:func:`simrig.geometry.project_boxes`: clipped to the near plane and the image), kept
-    where in view; sorted by frame, then track row, then camera. Tracks at frames the ground truth lacks have
-    no 2D rows. Projects ``chunk_frames`` frames per call (bounded memory)."""
+    where in view — with capture timing, at each camera's capture time (the box moved with its own velocity,
+    the camera with the ego's), where that camera's ground truth is; sorted by frame, then track row, then
+    camera. Tracks at frames the ground truth lacks have no 2D rows. Projects ``chunk_frames`` frames per call
+    (bounded memory)."""
     frame, camera, index, boxes = [], [], [], []
     names = np.array(truth.rig.camera_names, dtype=object)
     starts = np.searchsorted(tracks3d.frame, truth.frames)
@@ -354,7 +372,8 @@ def project_tracks(truth: GroundTruth, tracks3d: TrackRows, *, chunk_frames: int
             continue
         rows = np.concatenate([np.arange(lo, hi) for lo, hi in zip(starts[chunk], stops[chunk], strict=True)])
         pose = np.repeat(np.arange(len(counts)), counts)
-        projection = project_boxes_at(tracks3d.boxes[rows], truth.rig, truth.egos[chunk], pose)
+        offsets = None if truth.capture_offsets is None else truth.capture_offsets[chunk]
+        projection = project_boxes_at(tracks3d.boxes[rows], truth.rig, truth.egos[chunk], pose, offsets)
         cam, box = np.nonzero(projection.in_view)
         order = np.lexsort((cam, box))  # by track row, then camera: stays sorted by frame
         cam, box = cam[order], box[order]

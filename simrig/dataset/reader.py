@@ -31,7 +31,7 @@ from .arrow_columns import string_codes
 from .ground_truth import GroundTruth, load_depth
 from .manifest import MANIFEST_NAME, read_manifest
 from .manifest_files import ManifestFiles
-from .tables import SCHEMAS
+from .tables import ALL_SCHEMAS, OPTIONAL_SCHEMAS
 
 
 def _stack(table: pa.Table, names: tuple[str, ...]) -> np.ndarray:
@@ -210,6 +210,11 @@ class Dataset:
         for group in range(file.num_row_groups):
             yield file.read_row_group(group, columns=columns)
 
+    def has_table(self, name: str) -> bool:
+        """Whether the dataset holds table ``name`` (the optional ones, ``captures`` and ``ego_estimates``, only
+        when its scenario sets capture timing)."""
+        return name in self.manifest.get("files", {})
+
     def num_rows(self, name: str) -> int:
         """Rows of table ``name`` (from the Parquet footer; nothing else read)."""
         return self._parquet(name).metadata.num_rows
@@ -217,14 +222,16 @@ class Dataset:
     def _parquet(self, name: str) -> pq.ParquetFile:
         """Table ``name`` opened for reading, its file checked against the manifest's SHA-256 and its columns
         against the table's schema."""
-        if name not in SCHEMAS:
-            raise KeyError(f"unknown table {name!r}; tables: {', '.join(SCHEMAS)}")
+        if name not in ALL_SCHEMAS:
+            raise KeyError(f"unknown table {name!r}; tables: {', '.join(ALL_SCHEMAS)}")
+        if name in OPTIONAL_SCHEMAS and not self.has_table(name):
+            raise KeyError(f"dataset {str(self.path)!r} has no {name} table (its scenario sets no capture timing)")
         file = self.files.verified(name)
         try:
             parquet = pq.ParquetFile(file)
         except (pa.ArrowInvalid, OSError) as error:
             raise DatasetError(f"dataset {str(self.path)!r}: {name} is not a readable Parquet file ({error})") from None
-        if not parquet.schema_arrow.equals(SCHEMAS[name], check_metadata=False):
+        if not parquet.schema_arrow.equals(ALL_SCHEMAS[name], check_metadata=False):
             raise DatasetError(f"dataset {str(self.path)!r}: {name} columns {parquet.schema_arrow.names} do not "
                                "match its schema")
         return parquet
@@ -236,12 +243,25 @@ class Dataset:
 
     # ------------------------------------------------------------------ records
     def _ego_rows(self) -> list[tuple[int, float, EgoPose]]:
-        """(frame, timestamp [s], ego pose) of every frame, in order."""
-        ego = self.columns("ego_poses")
+        """(frame, timestamp [s], ego pose a tracker is given) of every frame, in order: the true pose, or the
+        estimate of ``ego_estimates`` when the scenario sets an ego-pose error."""
+        rows = self._pose_rows("ego_poses")
+        if not self.has_table("ego_estimates"):
+            return rows
+        estimates = self._pose_rows("ego_estimates")
+        if [row[0] for row in estimates] != [row[0] for row in rows]:
+            raise DatasetError(f"dataset {str(self.path)!r}: ego_estimates does not hold one row per frame")
+        return [(frame, timestamp, estimate[2]) for (frame, timestamp, _), estimate in zip(rows, estimates,
+                                                                                           strict=True)]
+
+    def _pose_rows(self, name: str) -> list[tuple[int, float, EgoPose]]:
+        """(frame, timestamp [s] or NaN, pose) of every row of the pose table ``name``."""
+        ego = self.columns(name)
         columns = {name: ego.column(name).to_numpy() for name in ego.column_names}
         fields = ("x", "y", "z", "yaw", "vx", "vy")
         return [
-            (int(frame), float(columns["timestamp"][row]), EgoPose(*(float(columns[name][row]) for name in fields)))
+            (int(frame), float(columns["timestamp"][row]) if "timestamp" in columns else np.nan,
+             EgoPose(*(float(columns[name][row]) for name in fields)))
             for row, frame in enumerate(columns["frame"])
         ]
 
@@ -295,6 +315,9 @@ class Dataset:
         ``frame.detections`` builds :class:`~simrig.types.Detection` objects only if asked. When the dataset
         has images (generated with ``--images``), ``frame.images`` maps each camera to the path of its PNG for
         that frame (``images/CAMERA/FFFFFF.png``, RGB, the camera's width × height); empty otherwise."""
+        if self.has_table("captures"):
+            yield from self._delivered_sensor_frames()
+            return
         dropped = self.columns("frames", ["dropped"]).column("dropped").to_numpy(zero_copy_only=False)
         rig = self.rig
         images = self.image_folder
@@ -322,6 +345,45 @@ class Dataset:
                 images={} if images is None else {name: str(images / name / f"{frame:06d}.png")
                                                   for name in rig.camera_names},
             )
+
+    def _delivered_sensor_frames(self) -> Iterator[SensorFrame]:
+        """:meth:`sensor_frames` of a dataset with capture timing: each detection is given at the step of the
+        frame its capture arrives by (``captures.arrival_frame``), with its camera's reported capture time, and
+        marked late when that is after its own frame. A capture taken in a dropped frame is lost; one arriving
+        at a dropped frame is given at the next frame that is stepped. Reads the detections whole."""
+        dropped = self.columns("frames", ["dropped"]).column("dropped").to_numpy(zero_copy_only=False)
+        rig = self.rig
+        c, frames = len(rig.cameras), len(dropped)
+        detections = _DetectionChunk.empty(self._embedding_dimension)
+        for chunk in self._detection_chunks(rig):
+            detections = detections.joined(chunk)
+        captures = self.columns("captures")
+        camera_codes = {name: code for code, name in enumerate(rig.camera_names)}
+        key = (captures.column("frame").to_numpy().astype(np.int64) * c
+               + string_codes(captures.column("camera"), camera_codes, f"{self.path}: captures camera"))
+        if not np.array_equal(key, np.arange(frames * c)):
+            raise DatasetError(f"dataset {str(self.path)!r}: captures does not hold one row per frame and camera")
+        stepped = np.flatnonzero(~dropped)
+        # the first stepped frame at or after each frame (frames: never)
+        next_step = np.append(stepped, frames)[np.searchsorted(stepped, np.arange(frames + 1))]
+        rows = detections.frame.astype(np.int64) * c + detections.cameras
+        arrival = next_step[np.minimum(captures.column("arrival_frame").to_numpy().astype(np.int64)[rows], frames)]
+        arrival[dropped[detections.frame]] = frames
+        reported = captures.column("reported_time").to_numpy()[rows]
+        order = np.lexsort((np.arange(len(rows)), detections.cameras, arrival))
+        arrival = arrival[order]
+        images = self.image_folder
+        for frame, timestamp, pose in self._ego_rows():
+            if dropped[frame]:
+                continue
+            lo, hi = np.searchsorted(arrival, [frame, frame + 1])
+            take = order[lo:hi]
+            arrays = DetectionArrays(detections.boxes3d[take], detections.boxes2d[take], detections.scores[take],
+                                     detections.labels[take], detections.cameras[take], detections.embeddings[take],
+                                     reported[take], detections.frame[take] < frame)
+            yield SensorFrame(frame, timestamp, pose, rig, arrays=arrays,
+                              images={} if images is None else {name: str(images / name / f"{frame:06d}.png")
+                                                                for name in rig.camera_names})
 
     @cached_property
     def _embedding_dimension(self) -> int:

@@ -13,6 +13,14 @@
                 its detection probability and the causes that affected it. Never given to a tracker.
 ``frames``      one row per frame: whether the sensor frame was dropped, and the events active then.
 
+Written only when the scenario sets capture timing (:mod:`simrig.scenarios.timing_schema`), so that a dataset of an
+ideal rig has the tables it always had:
+
+``captures``      one row per (frame, camera), rig order: the camera's true capture time, the timestamp it
+                  reported, and the frame at whose step its detections reach the tracker. ``projections`` then
+                  holds each camera's ground truth at its true capture time.
+``ego_estimates`` one row per frame: the ego pose the tracker is given (``ego_poses`` keeps the true one).
+
 Rows are sorted by frame; within a frame as described per table, exactly as written.
 """
 
@@ -22,7 +30,6 @@ import numpy as np
 import pyarrow as pa
 
 from ..causes import CAUSE_BITS, CAUSE_NAMES
-from ..geometry import Projection
 from ..render.visibility import Visibility
 from ..sensor.model import SensorOutput
 from ..types import BOX2D_FIELDS, BOX3D_FIELDS, GroundTruthFrame
@@ -68,6 +75,20 @@ FRAMES = pa.schema(
     [pa.field("frame", pa.int32()), pa.field("timestamp", _F64, metadata={"unit": "s"}),
      pa.field("dropped", pa.bool_()), pa.field("events", pa.list_(pa.string()))]
 )
+CAPTURES = pa.schema(
+    [pa.field("frame", pa.int32()), pa.field("camera", pa.string()),
+     pa.field("capture_time", _F64, metadata={"unit": "s"}), pa.field("reported_time", _F64, metadata={"unit": "s"}),
+     pa.field("arrival_frame", pa.int32())],
+    metadata={"arrival_frame": "the frame whose tracker step receives this capture's detections"},
+)
+EGO_ESTIMATES = pa.schema(
+    [pa.field("frame", pa.int32())]
+    + [pa.field(name, _F64, metadata={"unit": unit}) for name, unit in zip(
+        ("x", "y", "z", "yaw", "vx", "vy"), ("m", "m", "m", "rad", "m/s", "m/s"), strict=True
+    )]
+)
+OPTIONAL_SCHEMAS: dict[str, pa.Schema] = {"captures": CAPTURES, "ego_estimates": EGO_ESTIMATES}
+"""Tables a dataset holds only when its scenario sets capture timing."""
 SCHEMAS: dict[str, pa.Schema] = {
     "ego_poses": EGO_POSES,
     "ground_truth": GROUND_TRUTH,
@@ -77,6 +98,8 @@ SCHEMAS: dict[str, pa.Schema] = {
     "sensor_truth": SENSOR_TRUTH,
     "frames": FRAMES,
 }
+"""The tables every dataset holds."""
+ALL_SCHEMAS: dict[str, pa.Schema] = {**SCHEMAS, **OPTIONAL_SCHEMAS}
 
 
 def _actor_major(array: np.ndarray) -> np.ndarray:
@@ -86,12 +109,12 @@ def _actor_major(array: np.ndarray) -> np.ndarray:
 
 def frame_columns(
     state: GroundTruthFrame,
-    projection: Projection,
     visibility: Visibility,
     sensor: SensorOutput,
     camera_names: tuple[str, ...],
 ) -> dict[str, dict]:
-    """Column arrays of one frame for each table (vectorised; camera order is the rig's)."""
+    """Column arrays of one frame for each table (vectorised; camera order is the rig's). The projections are
+    the sensor's (each camera's ground truth at its capture time)."""
     n, c = len(state.actor_ids), len(camera_names)
     ego = state.ego
     ego_columns = {
@@ -105,6 +128,7 @@ def frame_columns(
         "class": state.classes.astype(str),
         **{name: state.boxes[:, i] for i, name in enumerate(BOX3D_FIELDS)},
     }
+    projection = sensor.projection  # each camera's ground truth at its capture time
     boxes = _actor_major(projection.boxes)
     pair_columns = {
         "frame": np.full(n * c, state.frame, dtype=np.int32),
@@ -132,7 +156,29 @@ def frame_columns(
         "projections": projections,
         "visibility": visibility_columns,
         **_sensor_columns(state.frame, state.timestamp, sensor),
+        **_timing_columns(state.frame, sensor, camera_names),
     }
+
+
+def _timing_columns(frame: int, sensor: SensorOutput, camera_names: tuple[str, ...]) -> dict[str, dict]:
+    """The ``captures`` and ``ego_estimates`` rows of one frame, for the timing the scenario sets (none: {})."""
+    out = {}
+    captures = sensor.captures
+    if captures is not None:
+        c = len(camera_names)
+        out["captures"] = {
+            "frame": np.full(c, frame, dtype=np.int32),
+            "camera": np.array(camera_names, dtype=str),
+            "capture_time": captures.tick + captures.offsets,
+            "reported_time": captures.reported,
+            "arrival_frame": captures.arrival_frame.astype(np.int32),
+        }
+    if sensor.ego_estimate is not None:
+        ego = sensor.ego_estimate
+        out["ego_estimates"] = {"frame": np.array([frame], dtype=np.int32),
+                                **{name: np.array([getattr(ego, name)], dtype=float)
+                                   for name in ("x", "y", "z", "yaw", "vx", "vy")}}
+    return out
 
 
 def _sensor_columns(frame: int, timestamp: float, sensor: SensorOutput) -> dict[str, dict]:

@@ -31,7 +31,7 @@ from .manifest import (
     written_by_simrig,
 )
 from .outputs import PARTIAL_MARKER, check_output_path, make_partial, partial_sibling, publish, remove_stale_partials
-from .tables import SCHEMAS
+from .tables import ALL_SCHEMAS, SCHEMAS
 
 FRAMES_PER_ROW_GROUP = 100
 """Frames buffered in memory before a Parquet row group is written (bounds memory on long runs)."""
@@ -67,7 +67,7 @@ def check_output_folder(out: Path, *, overwrite: bool) -> None:
 def _dataset_file_names(folder: Path):
     """Whether a relative path in the dataset ``folder`` is one simrig writes: a table, ``rig.json``, the
     manifest, an image, or a file the folder's manifest lists (read even when the manifest is damaged)."""
-    names = {f"{name}.parquet" for name in SCHEMAS} | {"rig.json", MANIFEST_NAME}
+    names = {f"{name}.parquet" for name in ALL_SCHEMAS} | {"rig.json", MANIFEST_NAME}
     try:
         listed = json.loads(read_capped(folder / MANIFEST_NAME, "manifest")).get("files", {})
         names |= {entry["file"] for entry in listed.values() if isinstance(entry, dict)
@@ -100,8 +100,8 @@ class DatasetWriter:
         self.overwrite = overwrite
         self.partial = partial_sibling(self.out)
         self._writers: dict[str, pq.ParquetWriter] = {}
-        self._buffers: dict[str, list[dict]] = {name: [] for name in SCHEMAS}
-        self._rows: dict[str, int] = dict.fromkeys(SCHEMAS, 0)
+        self._buffers: dict[str, list[dict]] = {name: [] for name in ALL_SCHEMAS}
+        self._rows: dict[str, int] = dict.fromkeys(ALL_SCHEMAS, 0)
         self._buffered_frames = 0
         self._committed = False
         self.kept: list[Path] = []
@@ -144,7 +144,7 @@ class DatasetWriter:
 
     def _flush(self) -> None:
         for name, chunks in self._buffers.items():
-            schema = SCHEMAS[name]
+            schema = ALL_SCHEMAS[name]
             if not chunks:
                 continue
             arrays = [_concatenate([chunk[field.name] for chunk in chunks], field.type) for field in schema]

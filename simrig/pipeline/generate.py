@@ -124,7 +124,7 @@ def generate(
                     times.images += time.perf_counter() - tick
 
                 tick = time.perf_counter()
-                writer.write_frame(frame_columns(state, projection, visibility, output, rig.camera_names))
+                writer.write_frame(frame_columns(state, visibility, output, rig.camera_names))
                 times.writing += time.perf_counter() - tick
             tick = time.perf_counter()
             manifest = writer.commit(

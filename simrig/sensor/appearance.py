@@ -218,7 +218,7 @@ class Embeddings:
         embeddings = np.full((len(batch.cameras), n, d), np.float32(np.nan), dtype=np.float32)
         cameras, actors = np.nonzero(batch.detected)
         if len(actors):
-            sides = _viewed_side(batch.boxes3d[actors], batch.world_from_camera[cameras, :3, 3])
+            sides = _viewed_side(batch.boxes3d[cameras, actors], batch.world_from_camera[cameras, :3, 3])
             appearance = self.appearance(batch.actor_ids[actors], batch.classes[actors], sides)
             disturbance = noise[cameras, actors] * sigma[cameras, actors, None]
             if drift is not None:

@@ -27,8 +27,9 @@ class SensorBatch:
     """Everything the detectors of ``C`` cameras (rig order) know and decide at one frame, vectorised over
     cameras × the ``N`` actors of the frame (every camera sees the same actor list; most are out of its view).
 
-    Inputs (ground truth, never shown to a tracker): ``classes`` ``(N,)`` and ``boxes3d`` ``(N, 9)`` world
-    frame, shared by all cameras; per camera ``world_from_camera`` ``(C, 4, 4)``; per camera and actor
+    Inputs (ground truth, never shown to a tracker): ``classes`` ``(N,)``; ``boxes3d`` ``(C, N, 9)`` world
+    frame, each camera's at its capture time (:mod:`.capture`; the same rows for every camera of a synchronous
+    rig); per camera ``world_from_camera`` ``(C, 4, 4)`` at its capture time; per camera and actor
     ``boxes2d`` ``(C, N, 4)`` pixels (NaN where not in view), ``truncation``, ``visible_fraction`` (1 −
     occlusion; 0 where unknown or hidden) and ``distance`` [m] from the camera's optical centre to the box
     centre, ``in_view`` — each ``(C, N)``.

@@ -223,7 +223,7 @@ class Monocular3D(_Random):
         factor = batch.noise_factor
         camera_centre = batch.world_from_camera[:, None, :3, 3]  # (C, 1, 3)
         true = batch.boxes3d
-        ray = true[:, :3] - camera_centre  # world-frame ray to the centre [m], (C, N, 3)
+        ray = true[..., :3] - camera_centre  # world-frame ray to the centre [m], (C, N, 3)
         distance = np.linalg.norm(ray, axis=-1)
         unit = ray / np.maximum(distance, 1e-9)[..., None]
         # Two directions across the ray: horizontal (world z × ray) and the one perpendicular to both.
@@ -237,9 +237,9 @@ class Monocular3D(_Random):
         centre = camera_centre + unit * depth[..., None] + across * lateral[..., :1] + up * lateral[..., 1:]
         out = np.empty(centre.shape[:2] + (9,))
         out[..., :3] = centre
-        out[..., 3:6] = true[:, 3:6] * np.maximum(0.1, 1.0 + errors[..., 3:6] * (c.size_sigma * growth)[..., None])
-        out[..., 6] = true[:, 6] + errors[..., 6] * np.radians(c.yaw_sigma_deg) * growth + np.where(flips, np.pi, 0.0)
-        out[..., 7:9] = true[:, 7:9] + errors[..., 7:9] * (c.velocity_sigma_mps * growth)[..., None]
+        out[..., 3:6] = true[..., 3:6] * np.maximum(0.1, 1.0 + errors[..., 3:6] * (c.size_sigma * growth)[..., None])
+        out[..., 6] = true[..., 6] + errors[..., 6] * np.radians(c.yaw_sigma_deg) * growth + np.where(flips, np.pi, 0.0)
+        out[..., 7:9] = true[..., 7:9] + errors[..., 7:9] * (c.velocity_sigma_mps * growth)[..., None]
         if not self.enabled:  # the errors were drawn (and their processes advanced) all the same
             out[:] = true
         for index in np.nonzero(batch.yaw_offset)[0]:
@@ -267,7 +267,7 @@ class Scores(_Random):
         noise = self.draw(batch, "standard_normal") * c.sigma
         score = c.base + c.gain * quality + noise
         if c.error_gain:
-            offset = batch.det_boxes3d[..., :2] - batch.boxes3d[:, :2]
+            offset = batch.det_boxes3d[..., :2] - batch.boxes3d[..., :2]
             error = np.nan_to_num(np.hypot(offset[..., 0], offset[..., 1]))
             score -= c.error_gain * (1.0 - np.exp(-error / c.error_scale_m))
         if c.distance_gain:

@@ -22,6 +22,10 @@ group              removing it
                    fraction × (1 − truncation), then largest true box, then rig order) — an imperfection only
                    for a tracker scored in 3D: scored per camera in 2D, each camera's ground truth holds the
                    actor, so the other cameras' detections are not duplicates there
+``trigger``        every camera fires at the frame's tick and reports its true time (no trigger offsets,
+                   jitter or clock skew: :mod:`.capture`)
+``latency``        every detection reaches the tracker in its own frame
+``ego_pose``       the tracker is given the true ego pose (and the detections are placed with it)
 ``KIND#I``         scheduled sensor perturbation ``I`` of the scenario (e.g. ``occlude#0``) is not applied
 ================== ==========================================================================================
 """
@@ -30,6 +34,9 @@ from __future__ import annotations
 
 from simrig.scenarios import Scenario
 from simrig.scenarios.perturbation_schema import WORLD_KINDS
+from simrig.scenarios.timing_schema import TIMING_TABLES
+
+from .capture import TIMING_GROUPS
 
 DETECTOR_GROUPS: tuple[str, ...] = ("occlusion", "truncation", "far_range", "random_misses", "localisation",
                                     "false_positives", "confusion", "reid", "duplicates", "cross_camera")
@@ -45,7 +52,7 @@ def _window_groups(scenario: Scenario) -> tuple[str, ...]:
 
 def all_groups(scenario: Scenario) -> tuple[str, ...]:
     """Every group that can be removed from ``scenario``'s detector (present or not)."""
-    return DETECTOR_GROUPS + _window_groups(scenario)
+    return DETECTOR_GROUPS + TIMING_GROUPS + _window_groups(scenario)
 
 
 def present_groups(scenario: Scenario, camera_count: int, scored_in_3d: bool = True) -> tuple[str, ...]:
@@ -69,7 +76,10 @@ def present_groups(scenario: Scenario, camera_count: int, scored_in_3d: bool = T
         "duplicates": s.duplicates.probability > 0,
         "cross_camera": camera_count > 1 and scored_in_3d,
     }
-    return tuple(name for name in DETECTOR_GROUPS if present[name]) + _window_groups(scenario)
+    timing = {group: getattr(s, table) != model() for group, (table, model) in
+              zip(TIMING_GROUPS, TIMING_TABLES.items(), strict=True)}
+    return (tuple(name for name in DETECTOR_GROUPS if present[name])
+            + tuple(name for name in TIMING_GROUPS if timing[name]) + _window_groups(scenario))
 
 
 def check_groups(names, scenario: Scenario) -> frozenset[str]:

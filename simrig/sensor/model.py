@@ -10,12 +10,13 @@ import numpy as np
 from simrig.scenarios import Scenario
 from simrig.scenarios.perturbation_schema import WORLD_KINDS, DropFrames
 
-from ..geometry import Projection, camera_from_world
+from ..geometry import Projection, camera_from_world, cameras_from_world_at, project_boxes_per_camera
 from ..render.visibility import Visibility
 from ..seeding import RandomStreams
-from ..types import GroundTruthFrame, Rig
+from ..types import EgoPose, GroundTruthFrame, Rig
 from .appearance import Embeddings
 from .batch import FrameContext, SensorBatch
+from .capture import Captures, CaptureTiming, EgoPoseEstimate, as_estimated, moved_boxes, moved_egos
 from .effects import (
     Box2DNoise,
     Clutter,
@@ -36,12 +37,17 @@ from .perturbations import PERTURBATION_EFFECTS, DroppedFrames, Scheduled, Sched
 
 @dataclass(frozen=True, eq=False)
 class SensorOutput:
-    """One frame of sensor output: the cameras' batch, whether the frame was dropped, and the scheduled
-    perturbations active at the frame (event strings)."""
+    """One frame of sensor output: the cameras' batch, whether the frame was dropped, the scheduled
+    perturbations active at the frame (event strings), the projection of the ground truth each camera saw (at
+    its capture time: the frame's own projection for a synchronous rig), and, when the scenario sets them, the
+    cameras' captures (:class:`~simrig.sensor.capture.Captures`) and the ego pose the tracker is given."""
 
     batch: SensorBatch
     dropped: bool
     events: tuple[str, ...]
+    projection: Projection
+    captures: Captures | None = None
+    ego_estimate: EgoPose | None = None
 
 
 class SensorModel:
@@ -101,6 +107,8 @@ class SensorModel:
             Duplicates(streams, sensor.duplicates, enabled=on["duplicates"]),
             DetectionOrder(streams),
         ]
+        self.timing = CaptureTiming(sensor, rig, rate, streams, removed)
+        self.ego_estimate = EgoPoseEstimate(sensor.ego_pose, rate, streams, enabled="ego_pose" not in removed)
 
     def observe(self, state: GroundTruthFrame, projection: Projection, visibility: Visibility) -> SensorOutput:
         """Run every effect on every camera for one frame (``projection`` and ``visibility`` of ``state``)."""
@@ -112,21 +120,31 @@ class SensorModel:
             actor_ids=state.actor_ids,
             ego_distance=np.hypot(state.boxes[:, 0] - ego.x, state.boxes[:, 1] - ego.y),
         )
-        world_from_camera = np.linalg.inv(camera_from_world(self.rig, ego))
-        visible_fraction = np.nan_to_num(1.0 - visibility.occlusion, nan=0.0)
-        if self.ghosts.enabled:
-            self.ghosts.advance(state.frame, ego, state.actor_ids, state.classes, np.asarray(state.boxes))
         boxes = np.asarray(state.boxes)
+        captures = self.timing.at(state.frame, state.timestamp) if self.timing.configured else None
+        if captures is None or not captures.offsets.any():
+            world_from_camera = np.linalg.inv(camera_from_world(self.rig, ego))
+            visible_fraction = np.nan_to_num(1.0 - visibility.occlusion, nan=0.0)
+            seen = np.broadcast_to(boxes, (len(self.rig.cameras), *boxes.shape))
+        else:  # each camera sees the world at its own capture time (module docstring of .capture)
+            seen = moved_boxes(boxes, captures.offsets)
+            egos = moved_egos(ego, captures.offsets)
+            world_from_camera = np.linalg.inv(cameras_from_world_at(self.rig, egos))
+            projection = project_boxes_per_camera(boxes, self.rig, egos, seen[..., :3] - boxes[:, :3])
+            # occlusion measured at the tick; an actor in view only at its capture time counts as unoccluded
+            visible_fraction = 1.0 - np.nan_to_num(visibility.occlusion, nan=0.0)
+        if self.ghosts.enabled:
+            self.ghosts.advance(state.frame, ego, state.actor_ids, state.classes, boxes)
         batch = SensorBatch(
             context=context,
             cameras=self.rig.cameras,
             world_from_camera=world_from_camera,
             classes=state.classes,
-            boxes3d=boxes,
+            boxes3d=seen,
             boxes2d=projection.boxes,
             truncation=projection.truncation,
             visible_fraction=np.where(projection.in_view, visible_fraction, 0.0),
-            distance=np.linalg.norm(boxes[:, :3] - world_from_camera[:, None, :3, 3], axis=-1),
+            distance=np.linalg.norm(seen[..., :3] - world_from_camera[:, None, :3, 3], axis=-1),
             in_view=projection.in_view,
         )
         for effect in self.effects:
@@ -135,9 +153,15 @@ class SensorModel:
             _keep_best_camera(batch)
         for effect in self.finishing:
             effect.apply(batch)
+        estimate = self.ego_estimate.estimate(state.frame, ego) if self.ego_estimate.configured else None
+        if estimate is not None and estimate != ego:
+            batch.det_boxes3d = as_estimated(batch.det_boxes3d, ego, estimate)
+            for clutter in batch.clutter:
+                if clutter:
+                    clutter["boxes3d"] = as_estimated(clutter["boxes3d"], ego, estimate)
         dropped = any(drop.dropped(state.frame) for drop in self.drops)
         events = tuple(effect.describe(context) for effect in self.scheduled if effect.active(state.frame))
-        return SensorOutput(batch, dropped, events)
+        return SensorOutput(batch, dropped, events, projection, captures, estimate)
 
 
 class SeenUnhindered:
