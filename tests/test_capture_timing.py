@@ -384,3 +384,19 @@ def test_reference_trackers_predict_tracks_to_each_capture_time(name, late):
     assert ids == (2 if name == "global_hungarian" else 1) and error < 0.1, errors
     # taken at the frame's time, B's detections (1.2 m ahead) pull the track forward; late ones (3 m behind) back
     assert errors[False][1] > (1.0 if late else 0.3), errors
+
+
+def test_tracks_made_with_the_estimated_pose_are_scored_relative_to_the_ego(timed):
+    from simrig.dataset.ground_truth import relative_to_true_ego
+    from simrig.dataset.tracks_file import TrackRows
+
+    _, dataset, _ = timed
+    truth = dataset.ground_truth
+    assert truth.given_egos is not None
+    # a tracker that reports every car exactly where the estimated pose puts it
+    position = np.searchsorted(truth.frames, truth.frame)
+    reported = np.concatenate([as_estimated(truth.boxes[position == i], truth.egos[i], truth.given_egos[i])
+                               for i in range(len(truth.frames))])
+    assert np.abs(reported[:, :2] - truth.boxes[:, :2]).max() > 0.1
+    rows = TrackRows(truth.frame, truth.actor_id, truth.label, np.ones(len(truth.frame)), reported)
+    np.testing.assert_allclose(relative_to_true_ego(truth, rows).boxes, truth.boxes, atol=1e-9)

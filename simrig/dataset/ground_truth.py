@@ -20,6 +20,7 @@ import pyarrow.compute as pc
 from ..causes import CAUSE_BITS, CAUSE_NAMES, Cause
 from ..errors import DatasetError
 from ..geometry import project_boxes_at
+from ..sensor.capture import as_estimated
 from ..types import BOX2D_FIELDS, BOX3D_FIELDS, EgoPose, Rig
 from .arrow_columns import shared_strings, string_codes
 from .tables import SCHEMAS
@@ -47,7 +48,8 @@ class GroundTruth:
     causes_known: ``False`` for imported ground truth, which records no sensor and so no causes (an error's
     cause is then ``unknown``, never ``none``). capture_offsets: ``(F, C)`` [s] each camera's true capture time
     minus its frame's tick, when the scenario sets capture timing (each camera's 2D ground truth is at its
-    capture time; the 3D ground truth at the tick), else ``None``.
+    capture time; the 3D ground truth at the tick), else ``None``. given_egos: the ego pose the tracker was
+    given per frame when the scenario sets an ego-pose error (``egos`` keeps the true one), else ``None``.
 
     What exists only where the actor is in view is held for those ``V`` (row, camera) pairs alone, in
     row-major order (that of ``np.nonzero(in_view)``, the tables' own; a long run has most actors out of most
@@ -78,6 +80,7 @@ class GroundTruth:
     source_ignored: np.ndarray | None = None
     causes_known: bool = True
     capture_offsets: np.ndarray | None = None
+    given_egos: tuple[EgoPose, ...] | None = None
 
     def view_index(self, rows: np.ndarray, camera: int) -> np.ndarray:
         """Index into the ``view_*`` arrays of each of ``rows`` in camera ``camera`` (rig order); a ``KeyError``
@@ -321,6 +324,7 @@ def load_ground_truth(dataset: Dataset) -> GroundTruth:
         source_ignored=_source_ignored(dataset, n, c),
         causes_known=dataset.causes_known,
         capture_offsets=_capture_offsets(dataset, ego.column("timestamp").to_numpy(), c),
+        given_egos=_given_egos(dataset, len(frames)),
     )
     camera_of = {name: i for i, name in enumerate(cameras)}
     for sensor in dataset.batches("sensor_truth", ["frame", "camera", "actor_id", "detection", "causes"]):
@@ -345,6 +349,36 @@ def _capture_offsets(dataset: Dataset, timestamps: np.ndarray, cameras: int) -> 
         raise DatasetError(f"dataset {str(dataset.path)!r}: captures holds {len(times)} rows, not one per frame "
                            f"and camera ({len(timestamps)} × {cameras})")
     return times.reshape(len(timestamps), cameras) - timestamps[:, None]
+
+
+def _given_egos(dataset: Dataset, frames: int) -> tuple[EgoPose, ...] | None:
+    """The ``ego_estimates`` table's poses (one per frame), or ``None`` for a dataset without one."""
+    if not dataset.has_table("ego_estimates"):
+        return None
+    table = dataset.columns("ego_estimates")
+    if table.num_rows != frames:
+        raise DatasetError(f"dataset {str(dataset.path)!r}: ego_estimates holds {table.num_rows} rows, not one per "
+                           f"frame ({frames})")
+    columns = [table.column(name).to_numpy() for name in ("x", "y", "z", "yaw", "vx", "vy")]
+    return tuple(EgoPose(*(float(column[i]) for column in columns)) for i in range(frames))
+
+
+def relative_to_true_ego(truth: GroundTruth, tracks3d: TrackRows) -> TrackRows:
+    """3D tracks of a tracker given an estimated ego pose, put in the true world frame for scoring: each frame's
+    boxes keep where they are relative to the ego, moved from the pose the tracker was given to the true pose
+    (what a car acts on is where an object is relative to it; the pose estimate's own error is not the
+    tracker's). The tracks unchanged when the dataset has no ego-pose error."""
+    if truth.given_egos is None or not len(tracks3d):
+        return tracks3d
+    boxes = np.array(tracks3d.boxes, dtype=float, copy=True)
+    position = np.searchsorted(truth.frames, tracks3d.frame)
+    known = (position < len(truth.frames)) & (truth.frames[np.minimum(position, len(truth.frames) - 1)]
+                                              == tracks3d.frame)
+    for index in np.unique(position[known]):
+        rows = known & (position == index)
+        # as_estimated maps the other way round here: from the given pose's world to the true one's
+        boxes[rows] = as_estimated(boxes[rows], truth.given_egos[index], truth.egos[index])
+    return TrackRows(tracks3d.frame, tracks3d.track_id, tracks3d.label, tracks3d.score, boxes, tracks3d.camera)
 
 
 def load_depth(dataset: Dataset) -> np.ndarray:

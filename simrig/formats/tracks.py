@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from simrig.dataset.ground_truth import project_tracks
+from simrig.dataset.ground_truth import project_tracks, relative_to_true_ego
 from simrig.dataset.tracks_file import TRACKS2D_FILE, TRACKS3D_FILE, TrackRows, TrackSet, read_tracks, tracks_in_memory
 from simrig.errors import TracksError
 from simrig.formats import OUTSIDE_FORMATS
@@ -98,4 +98,5 @@ def dataset_tracks(dataset, path: Path | str, fmt: str | None = None) -> tuple[T
                             tokens=sample_tokens(dataset), classes="any", scenes=scene_of_frame(dataset))
     if tracks.tracks3d is None or (tracks.tracks2d is not None and len(tracks.tracks2d)):
         return tracks.tracks3d, tracks.tracks2d
-    return tracks.tracks3d, project_tracks(truth, tracks.tracks3d)
+    tracks3d = relative_to_true_ego(truth, tracks.tracks3d)  # drawn where the scorer sees them
+    return tracks3d, project_tracks(truth, tracks3d)

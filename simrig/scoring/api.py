@@ -16,7 +16,7 @@ from simrig.scenarios.evaluation_schema import EvaluationConfig
 from simrig.scoring.results import METRICS_2D, METRICS_3D, ScoreReport
 
 from ..dataset import Dataset
-from ..dataset.ground_truth import GroundTruth
+from ..dataset.ground_truth import GroundTruth, relative_to_true_ego
 from ..errors import TracksError
 from .amota import amota_family, combine_classes
 from .attribution import ERRORS_SCHEMA, Attributor
@@ -72,6 +72,8 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
                                 tokens=sample_tokens(dataset), classes=config.classes,
                                 scenes=scene_of_frame(dataset))
     _check_made_on(dataset, tracks)
+    if tracks.tracks3d is not None and truth.given_egos is not None:  # scored relative to the ego
+        tracks = TrackSet(tracks.source, relative_to_true_ego(truth, tracks.tracks3d), tracks.tracks2d, tracks.made_on)
     has_2d_tracks = tracks.tracks2d is not None and len(tracks.tracks2d) > 0
     if not dataset.has_3d and not has_2d_tracks and tracks.tracks3d is not None and len(tracks.tracks3d):
         raise TracksError(f"{tracks.source}: 3D tracks, but dataset {str(dataset.path)!r} holds 2D ground truth "

@@ -9,7 +9,8 @@ This is exact for an actor at constant velocity; otherwise its error is at most 
 acceleration): 1.9 cm for the hardest braking highway-env's vehicles do (6 m/s²) at δ = 80 ms, 0.5 cm at the
 nuScenes-like 42 ms spread. (Visibility is the one exception: the occlusion fraction is the one measured on the
 frame tick's render, since rendering each camera at its own instant would multiply the render cost; in 80 ms it
-changes only at an occluder's edge.)
+changes only at an occluder's edge. An actor in a camera's view at its capture time but not at the tick has no
+measured visibility there and counts as hidden, as an unmeasured actor does on a synchronous rig.)
 
 Random draws
 ------------

@@ -122,17 +122,17 @@ class SensorModel:
         )
         boxes = np.asarray(state.boxes)
         captures = self.timing.at(state.frame, state.timestamp) if self.timing.configured else None
+        # the visible fraction measured at the tick (for every camera, whenever it fires: .capture's docstring);
+        # unmeasured (not in view at the tick, or no pixel at the render's resolution): seen as hidden
+        visible_fraction = np.nan_to_num(1.0 - visibility.occlusion, nan=0.0)
         if captures is None or not captures.offsets.any():
             world_from_camera = np.linalg.inv(camera_from_world(self.rig, ego))
-            visible_fraction = np.nan_to_num(1.0 - visibility.occlusion, nan=0.0)
             seen = np.broadcast_to(boxes, (len(self.rig.cameras), *boxes.shape))
         else:  # each camera sees the world at its own capture time (module docstring of .capture)
             seen = moved_boxes(boxes, captures.offsets)
             egos = moved_egos(ego, captures.offsets)
             world_from_camera = np.linalg.inv(cameras_from_world_at(self.rig, egos))
             projection = project_boxes_per_camera(boxes, self.rig, egos, seen[..., :3] - boxes[:, :3])
-            # occlusion measured at the tick; an actor in view only at its capture time counts as unoccluded
-            visible_fraction = 1.0 - np.nan_to_num(visibility.occlusion, nan=0.0)
         if self.ghosts.enabled:
             self.ghosts.advance(state.frame, ego, state.actor_ids, state.classes, boxes)
         batch = SensorBatch(
