@@ -199,6 +199,11 @@ class Scenario(Strict):
                    else "offsets_s" if capture.trigger == "given" else "spread_s")
             raise ValueError(f"sensor.capture.{key}: the last capture of a frame would come {latest:g} s after its "
                              f"tick (offset + 3 σ of jitter), not within the frame period ({period:g} s)")
+        for name, rate in capture.rate_hz.items():
+            every = self.frame_rate_hz / rate
+            if rate > self.frame_rate_hz or abs(every - round(every)) > 1e-9:
+                raise ValueError(f"sensor.capture.rate_hz.{name}: {rate:g} Hz does not divide the frame rate "
+                                 f"({self.frame_rate_hz:g} Hz); a camera fires every n-th frame")
         run = self.frames * period
         for key, delay in [("fixed_s", latency.fixed_s)] + [
                 (f"by_camera_s.{name}", latency.fixed_s + value) for name, value in latency.by_camera_s.items()]:

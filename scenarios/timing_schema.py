@@ -15,7 +15,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from .base import NonNegativeFloat, Strict
+from .base import NonNegativeFloat, PositiveFloat, Strict
 
 Seconds = Annotated[float, Field(ge=0, le=10, allow_inf_nan=False)]
 """[s] a non-negative time of at most 10 s."""
@@ -31,7 +31,8 @@ class CaptureConfig(Strict):
     nuScenes cameras are triggered when the top lidar sweeps past each camera's field of view; ``given`` —
     ``offsets_s`` per camera. ``jitter_s``: σ of a Gaussian added to every capture time (clipped to ±3σ).
     ``clock_skew_s``: per camera, a constant error of the timestamp the camera reports (the true capture time
-    is unchanged: ground truth is taken at the true time, a tracker reads the reported one).
+    is unchanged: ground truth is taken at the true time, a tracker reads the reported one). ``rate_hz``: per
+    camera, a rate below the frame rate (dividing it): the camera fires every n-th frame, from frame 0.
     """
 
     trigger: Literal["synchronous", "sweep", "given"] = "synchronous"
@@ -46,6 +47,10 @@ class CaptureConfig(Strict):
     """[s] σ of the random part of each capture time."""
     clock_skew_s: dict[str, SignedSeconds] = Field(default_factory=dict)
     """[s] per camera name, the constant error of its reported timestamps."""
+    rate_hz: dict[str, PositiveFloat] = Field(default_factory=dict)
+    """[Hz] per camera name, its frame rate when below the scenario's (which it must divide: a camera fires every
+    n-th frame); a camera not named fires every frame. At a frame it does not fire it takes no image: no
+    detections, and no ground truth in its view."""
 
     @model_validator(mode="after")
     def _check(self) -> CaptureConfig:
@@ -101,4 +106,5 @@ def timing_camera_names(sensor) -> list[tuple[str, str]]:
     return ([("sensor.capture.order", name) for name in capture.order]
             + [("sensor.capture.offsets_s", name) for name in capture.offsets_s]
             + [("sensor.capture.clock_skew_s", name) for name in capture.clock_skew_s]
+            + [("sensor.capture.rate_hz", name) for name in capture.rate_hz]
             + [("sensor.latency.by_camera_s", name) for name in latency.by_camera_s])

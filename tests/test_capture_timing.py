@@ -317,6 +317,11 @@ def test_a_scenario_without_timing_stores_no_trace_of_it(tmp_path):
     ('[sensor.capture]\ntrigger = "given"\noffsets_s = { CAM_FRONT = -0.01 }',
      "sensor.capture.offsets_s.CAM_FRONT: Input should be greater than or equal to 0"),
     ("[sensor.latency]\nrandom_s = nan", "sensor.latency.random_s"),
+    ("[sensor.capture]\nrate_hz = { CAM_BACK = -5.0 }",
+     "sensor.capture.rate_hz.CAM_BACK: Input should be greater than 0"),
+    ("[sensor.capture]\nrate_hz = { CAM_BACK = 3.0 }",
+     "sensor.capture.rate_hz.CAM_BACK: 3 Hz does not divide the frame rate (10 Hz)"),
+    ("[sensor.capture]\nrate_hz = { CAM_BACK = 20.0 }", "sensor.capture.rate_hz.CAM_BACK: 20 Hz does not divide"),
 ])
 def test_bad_timing_settings_get_one_line_naming_the_key(tmp_path, text, expected):
     (tmp_path / "bad.toml").write_text(f'name = "bad"\n{text}\n')
@@ -324,6 +329,31 @@ def test_bad_timing_settings_get_one_line_naming_the_key(tmp_path, text, expecte
         load_scenario(tmp_path / "bad.toml")
     message = str(caught.value)
     assert expected in message and "\n" not in message, message
+
+
+def test_a_camera_slower_than_the_frame_rate_takes_an_image_every_n_th_frame(tmp_path):
+    from simrig.dataset.ground_truth import project_tracks
+    from simrig.dataset.tracks_file import TrackRows
+
+    (tmp_path / "slow.toml").write_text(SMALL.split("[sensor.capture]")[0]
+                                        + "[sensor.capture]\nrate_hz = { CAM_BACK = 5.0, CAM_FRONT = 2.5 }\n")
+    dataset = Dataset.open(generate(load_scenario(tmp_path / "slow.toml"), seed=2, out=tmp_path / "d").path)
+    captures = _table(dataset, "captures")
+    every = {"CAM_BACK": 2, "CAM_FRONT": 4}
+    expected = [frame % every.get(camera, 1) == 0 for frame, camera in zip(captures.frame, captures.camera,
+                                                                            strict=True)]
+    assert captures["fired"].tolist() == expected
+    detections = _table(dataset, "detections")
+    shot = {(f, c) for f, c, fired in zip(captures.frame, captures.camera, captures.fired, strict=True) if fired}
+    assert set(zip(detections.frame, detections.camera, strict=True)) <= shot
+    assert {c for f, c in zip(detections.frame, detections.camera, strict=True)} >= {"CAM_BACK", "CAM_FRONT"}
+    projections = _table(dataset, "projections")
+    seen = {(f, c) for f, c, v in zip(projections.frame, projections.camera, projections.in_view, strict=True) if v}
+    assert seen <= shot and {c for _, c in seen} >= {"CAM_BACK", "CAM_FRONT"}  # no image, no ground truth in view
+    truth = dataset.ground_truth  # a 3D tracker reporting the ground truth is projected only where an image was
+    rows = TrackRows(truth.frame, truth.actor_id, truth.label, np.ones(len(truth.frame)), truth.boxes)
+    projected = project_tracks(truth, rows)
+    assert set(zip(projected.frame, projected.camera, strict=True)) == seen
 
 
 def test_a_camera_the_rig_lacks_is_named_with_its_key(tmp_path):

@@ -47,9 +47,10 @@ class GroundTruth:
     ``DontCare`` — or ground truth its benchmark does not evaluate), or ``None`` when it marks none.
     causes_known: ``False`` for imported ground truth, which records no sensor and so no causes (an error's
     cause is then ``unknown``, never ``none``). capture_offsets: ``(F, C)`` [s] each camera's true capture time
-    minus its frame's tick, when the scenario sets capture timing (each camera's 2D ground truth is at its
-    capture time; the 3D ground truth at the tick), else ``None``. given_egos: the ego pose the tracker was
-    given per frame when the scenario sets an ego-pose error (``egos`` keeps the true one), else ``None``.
+    minus its frame's tick (NaN where the camera took no image), when the scenario sets capture timing (each
+    camera's 2D ground truth is at its capture time; the 3D ground truth at the tick), else ``None``. given_egos:
+    the ego pose the tracker was given per frame when the scenario sets an ego-pose error (``egos`` keeps the
+    true one), else ``None``.
 
     What exists only where the actor is in view is held for those ``V`` (row, camera) pairs alone, in
     row-major order (that of ``np.nonzero(in_view)``, the tables' own; a long run has most actors out of most
@@ -344,7 +345,9 @@ def _capture_offsets(dataset: Dataset, timestamps: np.ndarray, cameras: int) -> 
     frame, then camera in rig order); ``None`` for a dataset without one."""
     if not dataset.has_table("captures"):
         return None
-    times = dataset.columns("captures", ["capture_time"]).column("capture_time").to_numpy()
+    table = dataset.columns("captures", ["capture_time", "fired"])
+    times = np.where(table.column("fired").to_numpy(zero_copy_only=False), table.column("capture_time").to_numpy(),
+                     np.nan)
     if len(times) != len(timestamps) * cameras:
         raise DatasetError(f"dataset {str(dataset.path)!r}: captures holds {len(times)} rows, not one per frame "
                            f"and camera ({len(timestamps)} × {cameras})")
@@ -407,8 +410,10 @@ def project_tracks(truth: GroundTruth, tracks3d: TrackRows, *, chunk_frames: int
         rows = np.concatenate([np.arange(lo, hi) for lo, hi in zip(starts[chunk], stops[chunk], strict=True)])
         pose = np.repeat(np.arange(len(counts)), counts)
         offsets = None if truth.capture_offsets is None else truth.capture_offsets[chunk]
-        projection = project_boxes_at(tracks3d.boxes[rows], truth.rig, truth.egos[chunk], pose, offsets)
-        cam, box = np.nonzero(projection.in_view)
+        projection = project_boxes_at(tracks3d.boxes[rows], truth.rig, truth.egos[chunk], pose,
+                                      None if offsets is None else np.nan_to_num(offsets))
+        in_view = projection.in_view if offsets is None else projection.in_view & np.isfinite(offsets[pose]).T
+        cam, box = np.nonzero(in_view)  # a camera that took no image at a frame sees no track there
         order = np.lexsort((cam, box))  # by track row, then camera: stays sorted by frame
         cam, box = cam[order], box[order]
         frame.append(truth.frames[chunk][pose[box]])

@@ -17,8 +17,8 @@ Written only when the scenario sets capture timing (:mod:`simrig.scenarios.timin
 ideal rig has the tables it always had:
 
 ``captures``      one row per (frame, camera), rig order: the camera's true capture time, the timestamp it
-                  reported, and the frame at whose step its detections reach the tracker. ``projections`` then
-                  holds each camera's ground truth at its true capture time.
+                  reported, the frame at whose step its detections reach the tracker, and whether it fired.
+                  ``projections`` then holds each camera's ground truth at its true capture time.
 ``ego_estimates`` one row per frame: the ego pose the tracker is given (``ego_poses`` keeps the true one).
 
 Rows are sorted by frame; within a frame as described per table, exactly as written.
@@ -78,8 +78,9 @@ FRAMES = pa.schema(
 CAPTURES = pa.schema(
     [pa.field("frame", pa.int32()), pa.field("camera", pa.string()),
      pa.field("capture_time", _F64, metadata={"unit": "s"}), pa.field("reported_time", _F64, metadata={"unit": "s"}),
-     pa.field("arrival_frame", pa.int32())],
-    metadata={"arrival_frame": "the frame whose tracker step receives this capture's detections"},
+     pa.field("arrival_frame", pa.int32()), pa.field("fired", pa.bool_())],
+    metadata={"arrival_frame": "the frame whose tracker step receives this capture's detections",
+              "fired": "false: the camera (slower than the frame rate) took no image at this frame"},
 )
 EGO_ESTIMATES = pa.schema(
     [pa.field("frame", pa.int32())]
@@ -172,6 +173,7 @@ def _timing_columns(frame: int, sensor: SensorOutput, camera_names: tuple[str, .
             "capture_time": captures.tick + captures.offsets,
             "reported_time": captures.reported,
             "arrival_frame": captures.arrival_frame.astype(np.int32),
+            "fired": captures.fired,
         }
     if sensor.ego_estimate is not None:
         ego = sensor.ego_estimate

@@ -33,8 +33,8 @@ from ..seeding import RandomStreams
 from ..types import EgoPose, Rig
 
 TIMING_GROUPS: tuple[str, ...] = ("trigger", "latency", "ego_pose")
-"""The cause groups of capture timing, in reporting order: the capture schedule (trigger offsets, jitter and
-clock skew), the delivery delay, and the ego-pose error."""
+"""The cause groups of capture timing, in reporting order: the capture schedule (trigger offsets, jitter, clock
+skew and cameras slower than the frame rate), the delivery delay, and the ego-pose error."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,12 +42,14 @@ class Captures:
     """The cameras' captures of one frame, in rig order: ``offsets`` ``(C,)`` [s] true capture time minus the
     frame's tick; ``reported`` ``(C,)`` [s] the capture timestamps the cameras report (true time + clock skew);
     ``arrival_frame`` ``(C,)`` the frame at whose step the camera's detections reach the tracker (frame count
-    or more: never delivered)."""
+    or more: never delivered); ``fired`` ``(C,)`` whether the camera takes an image at this frame (a camera
+    running below the frame rate skips frames)."""
 
     tick: float
     offsets: np.ndarray
     reported: np.ndarray
     arrival_frame: np.ndarray
+    fired: np.ndarray
 
 
 def sweep_order(rig: Rig) -> tuple[str, ...]:
@@ -70,8 +72,8 @@ def check_timing_cameras(sensor, rig: Rig) -> None:
 class CaptureTiming:
     """The capture schedule and delivery delay of every camera of ``rig``, frame by frame.
 
-    ``removed``: the timing cause groups switched off (``trigger``: every camera at the tick with its true
-    timestamp; ``latency``: every detection on time). The draws are made all the same."""
+    ``removed``: the timing cause groups switched off (``trigger``: every camera at the tick, every frame, with its
+    true timestamp; ``latency``: every detection on time). The draws are made all the same."""
 
     def __init__(self, sensor, rig: Rig, frame_rate_hz: float, streams: RandomStreams,
                  removed: frozenset[str] = frozenset()):
@@ -92,6 +94,8 @@ class CaptureTiming:
         self.base = base
         self.skew = np.array([self.capture.clock_skew_s.get(name, 0.0) for name in names])
         self.delay = self.latency.fixed_s + np.array([self.latency.by_camera_s.get(name, 0.0) for name in names])
+        self.every = np.array([round(frame_rate_hz / self.capture.rate_hz[name]) if name in self.capture.rate_hz
+                               else 1 for name in names])
         self.trigger_on = "trigger" not in removed
         self.latency_on = "latency" not in removed
         self._jitter = streams.generator("capture") if self.capture.jitter_s > 0 else None
@@ -121,7 +125,9 @@ class CaptureTiming:
         # a frame's step runs at the end of its period: on time when the detections arrive by tick + period
         late_by = offsets + delay - self.period
         arrival = frame + np.where(late_by > 1e-9, np.ceil(late_by / self.period - 1e-9), 0).astype(np.int64)
-        return Captures(tick=tick, offsets=offsets, reported=tick + offsets + skew, arrival_frame=arrival)
+        fired = (frame % self.every == 0) if self.trigger_on else np.ones(self._cameras, dtype=bool)
+        return Captures(tick=tick, offsets=offsets, reported=tick + offsets + skew, arrival_frame=arrival,
+                        fired=fired)
 
 
 def moved_boxes(boxes: np.ndarray, offsets: np.ndarray) -> np.ndarray:

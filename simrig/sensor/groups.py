@@ -50,9 +50,17 @@ def _window_groups(scenario: Scenario) -> tuple[str, ...]:
                  if config.kind not in WORLD_KINDS)
 
 
+def _timing_groups(scenario: Scenario) -> tuple[str, ...]:
+    """The capture-timing groups whose table ``scenario`` sets (an ideal rig has none to remove)."""
+    sensor = scenario.sensor
+    return tuple(group for group, (table, model) in zip(TIMING_GROUPS, TIMING_TABLES.items(), strict=True)
+                 if getattr(sensor, table) != model())
+
+
 def all_groups(scenario: Scenario) -> tuple[str, ...]:
-    """Every group that can be removed from ``scenario``'s detector (present or not)."""
-    return DETECTOR_GROUPS + TIMING_GROUPS + _window_groups(scenario)
+    """Every group that can be removed from ``scenario``'s detector (present or not); the capture-timing groups
+    only where the scenario sets them."""
+    return DETECTOR_GROUPS + _timing_groups(scenario) + _window_groups(scenario)
 
 
 def present_groups(scenario: Scenario, camera_count: int, scored_in_3d: bool = True) -> tuple[str, ...]:
@@ -76,10 +84,8 @@ def present_groups(scenario: Scenario, camera_count: int, scored_in_3d: bool = T
         "duplicates": s.duplicates.probability > 0,
         "cross_camera": camera_count > 1 and scored_in_3d,
     }
-    timing = {group: getattr(s, table) != model() for group, (table, model) in
-              zip(TIMING_GROUPS, TIMING_TABLES.items(), strict=True)}
-    return (tuple(name for name in DETECTOR_GROUPS if present[name])
-            + tuple(name for name in TIMING_GROUPS if timing[name]) + _window_groups(scenario))
+    return tuple(name for name in DETECTOR_GROUPS if present[name]) + _timing_groups(scenario) + _window_groups(
+        scenario)
 
 
 def check_groups(names, scenario: Scenario) -> frozenset[str]:

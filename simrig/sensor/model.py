@@ -133,6 +133,8 @@ class SensorModel:
             egos = moved_egos(ego, captures.offsets)
             world_from_camera = np.linalg.inv(cameras_from_world_at(self.rig, egos))
             projection = project_boxes_per_camera(boxes, self.rig, egos, seen[..., :3] - boxes[:, :3])
+        if captures is not None and not captures.fired.all():  # no image: nothing in view, nothing reported
+            projection = _without_cameras(projection, ~captures.fired)
         if self.ghosts.enabled:
             self.ghosts.advance(state.frame, ego, state.actor_ids, state.classes, boxes)
         batch = SensorBatch(
@@ -147,6 +149,8 @@ class SensorModel:
             distance=np.linalg.norm(seen[..., :3] - world_from_camera[:, None, :3, 3], axis=-1),
             in_view=projection.in_view,
         )
+        if captures is not None:
+            batch.silenced = ~captures.fired
         for effect in self.effects:
             effect.apply(batch)
         if self.cross_camera:
@@ -162,6 +166,15 @@ class SensorModel:
         dropped = any(drop.dropped(state.frame) for drop in self.drops)
         events = tuple(effect.describe(context) for effect in self.scheduled if effect.active(state.frame))
         return SensorOutput(batch, dropped, events, projection, captures, estimate)
+
+
+def _without_cameras(projection: Projection, off: np.ndarray) -> Projection:
+    """``projection`` with the cameras ``off`` ``(C,)`` seeing nothing (no box, no truncation, nothing in view)."""
+    gone = off[:, None]
+    return Projection(boxes=np.where(gone[..., None], np.nan, projection.boxes),
+                      unclipped=np.where(gone[..., None], np.nan, projection.unclipped),
+                      truncation=np.where(gone, np.nan, projection.truncation), depth=projection.depth,
+                      in_view=projection.in_view & ~gone)
 
 
 class SeenUnhindered:
