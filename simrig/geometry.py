@@ -228,9 +228,8 @@ def project_boxes_at(boxes: np.ndarray, rig: Rig, egos: list[EgoPose], pose_of_b
         return _project_boxes_from(boxes, rig, np.swapaxes(transforms[pose_of_box], 0, 1))
     boxes = np.asarray(boxes, dtype=float)
     delta = np.asarray(offsets, dtype=float)[pose_of_box].T  # (C, N) [s]
-    moved = [[EgoPose(e.x + e.vx * float(d), e.y + e.vy * float(d), e.z, e.yaw, e.vx, e.vy) for d in row]
-             for e, row in zip(egos, offsets, strict=True)]
-    world_from_ego = np.array([[ego.world_from_ego() for ego in row] for row in moved]).reshape(len(egos), -1, 4, 4)
+    world_from_ego = np.array([[ego.moved(float(d)).world_from_ego() for d in row]
+                               for ego, row in zip(egos, offsets, strict=True)]).reshape(len(egos), -1, 4, 4)
     transforms = np.linalg.inv(world_from_ego @ _ego_from_cameras(rig))  # (F, C, 4, 4)
     transforms = np.swapaxes(transforms[pose_of_box], 0, 1).copy()  # (C, N, 4, 4)
     shifts = np.zeros((*delta.shape, 3))

@@ -69,6 +69,14 @@ class EgoPose:
     vx: float = 0.0
     vy: float = 0.0
 
+    def moved(self, seconds: float) -> EgoPose:
+        """The pose ``seconds`` later at constant velocity (heading and velocity unchanged).
+
+        >>> EgoPose(1.0, 2.0, 0.0, 0.0, vx=10.0).moved(0.04).x
+        1.4
+        """
+        return EgoPose(self.x + self.vx * seconds, self.y + self.vy * seconds, self.z, self.yaw, self.vx, self.vy)
+
     def world_from_ego(self) -> np.ndarray:
         """4×4 homogeneous transform taking ego-frame points to the world frame."""
         c, s = math.cos(self.yaw), math.sin(self.yaw)

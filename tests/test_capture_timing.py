@@ -58,7 +58,7 @@ def test_two_cameras_40_ms_apart_see_one_car_velocity_times_40_ms_apart():
     for index, offset in enumerate((0.0, 0.04)):
         car = CAR.copy()
         car[0, :2] += CAR[0, 7:9] * offset
-        ego = EgoPose(EGO.x + EGO.vx * offset, EGO.y, EGO.z, EGO.yaw, EGO.vx, EGO.vy)
+        ego = EgoPose(EGO.x + EGO.vx * offset, EGO.y, EGO.z, EGO.yaw, EGO.vx, EGO.vy)  # by hand, not .moved()
         np.testing.assert_allclose(output.projection.boxes[index], project_boxes(car, rig, ego).boxes[index],
                                    atol=1e-6)
     assert not np.allclose(output.projection.boxes[1], project_boxes(CAR, rig, EGO).boxes[1], atol=1.0)

@@ -141,8 +141,7 @@ def moved_boxes(boxes: np.ndarray, offsets: np.ndarray) -> np.ndarray:
 
 def moved_egos(ego: EgoPose, offsets: np.ndarray) -> list[EgoPose]:
     """The ego pose at each capture time (constant velocity from the tick)."""
-    return [EgoPose(ego.x + ego.vx * float(o), ego.y + ego.vy * float(o), ego.z, ego.yaw, ego.vx, ego.vy)
-            for o in offsets]
+    return [ego.moved(float(offset)) for offset in offsets]
 
 
 class EgoPoseEstimate:
