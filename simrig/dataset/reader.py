@@ -53,6 +53,11 @@ def embedding_matrix(column: pa.ChunkedArray, dimension: int) -> np.ndarray:
     return out
 
 
+def _image_paths(folder: Path | None, rig: Rig, frame: int) -> dict[str, str]:
+    """Per camera, the path of its PNG of ``frame`` in the dataset's ``images/`` ``folder`` (none without one)."""
+    return {} if folder is None else {name: str(folder / name / f"{frame:06d}.png") for name in rig.camera_names}
+
+
 @dataclass(frozen=True, eq=False)
 class _DetectionChunk:
     """Detections of consecutive frames as the arrays of :class:`~simrig.types.DetectionArrays` (rows sorted by
@@ -336,15 +341,7 @@ class Dataset:
                 continue
             arrays = (window.frame_arrays(frame) if window is not None
                       else _DetectionChunk.empty(self._embedding_dimension).frame_arrays(frame))
-            yield SensorFrame(
-                frame,
-                timestamp,
-                pose,
-                rig,
-                arrays=arrays,
-                images={} if images is None else {name: str(images / name / f"{frame:06d}.png")
-                                                  for name in rig.camera_names},
-            )
+            yield SensorFrame(frame, timestamp, pose, rig, arrays=arrays, images=_image_paths(images, rig, frame))
 
     def _delivered_sensor_frames(self) -> Iterator[SensorFrame]:
         """:meth:`sensor_frames` of a dataset with capture timing: each detection is given at the step of the
@@ -381,9 +378,7 @@ class Dataset:
             arrays = DetectionArrays(detections.boxes3d[take], detections.boxes2d[take], detections.scores[take],
                                      detections.labels[take], detections.cameras[take], detections.embeddings[take],
                                      reported[take], detections.frame[take] < frame)
-            yield SensorFrame(frame, timestamp, pose, rig, arrays=arrays,
-                              images={} if images is None else {name: str(images / name / f"{frame:06d}.png")
-                                                                for name in rig.camera_names})
+            yield SensorFrame(frame, timestamp, pose, rig, arrays=arrays, images=_image_paths(images, rig, frame))
 
     @cached_property
     def _embedding_dimension(self) -> int:
