@@ -236,6 +236,19 @@ def test_each_timing_cause_is_a_cause_group(timed):
     assert not {"trigger", "latency", "ego_pose"} & set(present_groups(load_scenario("highway_surround6"), 6))
 
 
+def test_another_process_makes_the_same_bytes(timed):
+    import os
+    import subprocess
+    import sys
+
+    _, dataset, folder = timed
+    env = {**os.environ, "PYOPENGL_PLATFORM": "egl"}
+    subprocess.run([sys.executable, "-m", "simrig.cli", "generate", str(folder / "timed.toml"), "--seed", "5", "--out",
+                    str(folder / "other-process"), "--quiet"], check=True, env=env, capture_output=True)
+    other = Dataset.open(folder / "other-process")
+    assert other.manifest["files"] == dataset.manifest["files"]
+
+
 def _removed(timed, group) -> Dataset:
     scenario, dataset, folder = timed
     return Dataset.open(generate(scenario, seed=5, out=folder / group, world_from=dataset,
@@ -430,3 +443,45 @@ def test_tracks_made_with_the_estimated_pose_are_scored_relative_to_the_ego(time
     assert np.abs(reported[:, :2] - truth.boxes[:, :2]).max() > 0.1
     rows = TrackRows(truth.frame, truth.actor_id, truth.label, np.ones(len(truth.frame)), reported)
     np.testing.assert_allclose(relative_to_true_ego(truth, rows).boxes, truth.boxes, atol=1e-9)
+
+
+def test_a_search_space_can_vary_the_timing(tmp_path):
+    from simrig.search import load_space
+
+    (tmp_path / "space.toml").write_text("""
+name = "timing"
+base = "sweep_surround6"
+frames = 20
+tracker = "saga"
+budget = 3
+seeds = 1
+
+[base_settings]
+"render.visibility" = false
+
+[objective]
+metric = "3d_AMOTA"
+direction = "minimize"
+failure = { metric = "3d_IDS", at_least = 1 }
+
+[[dimensions]]
+path = "sensor.capture.spread_s"
+low = 0.0
+high = 0.08
+
+[[dimensions]]
+path = "sensor.latency.fixed_s"
+low = 0.0
+high = 0.3
+
+[[dimensions]]
+path = "sensor.ego_pose.drift_m_per_sqrt_s"
+low = 0.0
+high = 1.0
+""")
+    space = load_space(tmp_path / "space.toml")
+    scenario = space.scenario_for({"sensor.capture.spread_s": 0.07, "sensor.latency.fixed_s": 0.25,
+                                   "sensor.ego_pose.drift_m_per_sqrt_s": 0.5})
+    assert (scenario.sensor.capture.spread_s, scenario.sensor.latency.fixed_s,
+            scenario.sensor.ego_pose.drift_m_per_sqrt_s) == (0.07, 0.25, 0.5)
+    assert scenario.sensor.capture.trigger == "sweep"  # the base scenario's own settings kept
