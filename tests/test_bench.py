@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 from simrig.scenarios import load_scenario
@@ -251,3 +252,15 @@ def test_a_2d_tracker_first_is_reported_under_a_2d_heading_with_its_real_switche
     assert f"| `deepsort` | 1 | 1 | {base['2d_HOTA']:.3f} |" in section and "| `saga`" not in section
     assert "Per camera: 2D HOTA" in section and "`CAM_FRONT`" in section
     assert "The cell where `deepsort`" in text
+
+
+def test_a_suite_without_base_points_reports_its_curves_and_no_empty_tables(smoke_local, tmp_path):
+    import shutil
+
+    bench = tmp_path / "no-base"
+    shutil.copytree(smoke_local.out, bench, ignore=shutil.ignore_patterns("datasets", "fragments"))
+    rows = pq.read_table(bench / "results.parquet").to_pandas()
+    pq.write_table(pa.Table.from_pandas(rows[rows["sweep"] != ""], preserve_index=False), bench / "results.parquet")
+    text = write_report(bench, out=tmp_path / "report").read_text()
+    assert "runs no scenario at its own settings (`base = false`)" in text
+    assert "| tracker | scenarios | sequences |" not in text and "## Robustness curves" in text

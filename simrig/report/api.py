@@ -65,8 +65,11 @@ def _header(bench: BenchResults, out: Path) -> list[str]:
 
 
 def _results_section(bench: BenchResults) -> list[str]:
-    lines = ["## Results per tracker", "",
-             "At each scenario's own settings: metrics are means over scenarios and seeds, counts are sums.", ""]
+    lines = ["## Results per tracker", ""]
+    if not (bench.results["sweep"] == "").any():
+        return lines + ["The suite runs no scenario at its own settings (`base = false`): its results are the "
+                        "robustness curves below.", ""]
+    lines += ["At each scenario's own settings: metrics are means over scenarios and seeds, counts are sums.", ""]
     for group in groups(bench.results):
         lines += [f"### {group.title}", ""] + tracker_table(bench, group) + [""]
         paired = paired_table(bench, group)
