@@ -26,7 +26,7 @@ from .merge import merge
 CATALOG_DIR = Path(__file__).resolve().parent
 SUITES_DIR = CATALOG_DIR / "suites"
 DEFAULT_SCENARIO = "highway_surround6"
-_NAMED_MESSAGE = re.compile(r"^([a-z_][a-z0-9_]*(?:\.[a-z0-9_]+)*(?:, [a-z_][a-z0-9_]*)*): (.*)$")
+_NAMED_MESSAGE = re.compile(r"^([a-z_][a-z0-9_]*(?:\.[A-Za-z0-9_]+)*(?:, [a-z_][a-z0-9_]*)*): (.*)$")
 
 __all__ = ["CATALOG_DIR", "DEFAULT_SCENARIO", "SUITES_DIR", "Scenario", "ScenarioError", "catalog",
            "describe_errors", "load_scenario", "suite_catalog"]

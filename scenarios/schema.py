@@ -14,6 +14,7 @@ from .base import FiniteFloat, NonNegativeFloat, PathName, PositiveFloat, Strict
 from .evaluation_schema import EvaluationConfig
 from .perturbation_schema import Perturbation
 from .sensor_schema import RenderConfig, SensorConfig
+from .timing_schema import latency_beyond
 
 TRAFFIC_ENVS = ("highway-v0", "merge-v0", "roundabout-v0", "intersection-v0")
 RIG_PRESETS = ("surround6", "stereo", "ring", "custom")
@@ -192,7 +193,7 @@ class Scenario(Strict):
     @model_validator(mode="after")
     def _check_timing(self) -> Scenario:
         """Capture offsets fit in a frame period; a fixed latency shorter than the run (or nothing ever arrives)."""
-        capture, latency, period = self.sensor.capture, self.sensor.latency, self.frame_period_s
+        capture, period = self.sensor.capture, self.frame_period_s
         latest = max([capture.spread_s, *capture.offsets_s.values()]) + 3.0 * capture.jitter_s
         if latest >= period:
             key = ("jitter_s" if capture.jitter_s and latest - 3.0 * capture.jitter_s < period
@@ -204,12 +205,9 @@ class Scenario(Strict):
             if rate > self.frame_rate_hz or abs(every - round(every)) > 1e-9:
                 raise ValueError(f"sensor.capture.rate_hz.{name}: {rate:g} Hz does not divide the frame rate "
                                  f"({self.frame_rate_hz:g} Hz); a camera fires every n-th frame")
-        run = self.frames * period
-        for key, delay in [("fixed_s", latency.fixed_s)] + [
-                (f"by_camera_s.{name}", latency.fixed_s + value) for name, value in latency.by_camera_s.items()]:
-            if delay >= run:
-                raise ValueError(f"sensor.latency.{key}: a latency of {delay:g} s is longer than the run "
-                                 f"({self.frames} frames, {run:g} s): no detection would ever arrive")
+        problem = latency_beyond(self, self.frames)
+        if problem:
+            raise ValueError(problem)
         return self
 
 

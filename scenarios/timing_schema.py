@@ -37,8 +37,8 @@ class CaptureConfig(Strict):
 
     trigger: Literal["synchronous", "sweep", "given"] = "synchronous"
     order: tuple[str, ...] = ()
-    """Camera names in firing order for ``sweep``; empty: clockwise from the front camera (the rig's cameras by
-    decreasing yaw, starting from the one closest to straight ahead)."""
+    """Every camera of the rig, in firing order, for ``sweep``; empty: clockwise from the front camera (the rig's
+    cameras by decreasing yaw, starting from the one closest to straight ahead)."""
     spread_s: Seconds = 0.0
     """[s] time from the first camera's trigger to the last one's (``sweep``)."""
     offsets_s: dict[str, Seconds] = Field(default_factory=dict)
@@ -64,6 +64,8 @@ class CaptureConfig(Strict):
             raise ValueError(f"{key}: only a 'sweep' trigger takes it (trigger is {self.trigger!r})")
         if self.trigger != "given" and self.offsets_s:
             raise ValueError(f"offsets_s: only a 'given' trigger takes it (trigger is {self.trigger!r})")
+        if self.trigger == "given" and not self.offsets_s:
+            raise ValueError("offsets_s: a 'given' trigger needs the offset of at least one camera")
         return self
 
 
@@ -72,11 +74,11 @@ class LatencyConfig(Strict):
     camera, plus ``by_camera_s`` for the named cameras, plus a random part, exponential with mean ``random_s``
     (drawn per camera and frame: one image's detections arrive together)."""
 
-    fixed_s: Seconds = 0.0
-    """[s] delay of every camera's detections."""
-    by_camera_s: dict[str, Seconds] = Field(default_factory=dict)
+    fixed_s: NonNegativeFloat = 0.0
+    """[s] delay of every camera's detections (shorter than the run)."""
+    by_camera_s: dict[str, NonNegativeFloat] = Field(default_factory=dict)
     """[s] per camera name, an extra delay."""
-    random_s: Seconds = 0.0
+    random_s: NonNegativeFloat = 0.0
     """[s] mean of the exponential random delay (0: none)."""
 
 
@@ -98,6 +100,18 @@ class EgoPoseConfig(Strict):
 TIMING_TABLES: dict[str, type[Strict]] = {"capture": CaptureConfig, "latency": LatencyConfig,
                                           "ego_pose": EgoPoseConfig}
 """The timing tables under ``[sensor]``, each also the name of its cause group."""
+
+
+def latency_beyond(scenario, frames: int) -> str | None:
+    """The message for a fixed latency of ``scenario`` at least as long as a run of ``frames`` frames (no detection
+    would ever arrive), naming its key; ``None`` when every camera's fixed latency is shorter."""
+    latency, run = scenario.sensor.latency, frames / scenario.frame_rate_hz
+    for key, delay in [("fixed_s", latency.fixed_s)] + [
+            (f"by_camera_s.{name}", latency.fixed_s + value) for name, value in latency.by_camera_s.items()]:
+        if delay >= run:
+            return (f"sensor.latency.{key}: a latency of {delay:g} s is longer than the run ({frames} frames, "
+                    f"{run:g} s): no detection would ever arrive")
+    return None
 
 
 def timing_camera_names(sensor) -> list[tuple[str, str]]:

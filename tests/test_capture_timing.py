@@ -335,13 +335,14 @@ def test_a_scenario_without_timing_stores_no_trace_of_it(tmp_path):
     ("[sensor.capture]\nrate_hz = { CAM_BACK = 3.0 }",
      "sensor.capture.rate_hz.CAM_BACK: 3 Hz does not divide the frame rate (10 Hz)"),
     ("[sensor.capture]\nrate_hz = { CAM_BACK = 20.0 }", "sensor.capture.rate_hz.CAM_BACK: 20 Hz does not divide"),
+    ('[sensor.capture]\ntrigger = "given"', "sensor.capture.offsets_s: a 'given' trigger needs the offset of at least"),
 ])
 def test_bad_timing_settings_get_one_line_naming_the_key(tmp_path, text, expected):
     (tmp_path / "bad.toml").write_text(f'name = "bad"\n{text}\n')
     with pytest.raises(ScenarioError) as caught:
         load_scenario(tmp_path / "bad.toml")
     message = str(caught.value)
-    assert expected in message and "\n" not in message, message
+    assert expected in message and "\n" not in message and "(top level)" not in message, message
 
 
 def test_a_camera_slower_than_the_frame_rate_takes_an_image_every_n_th_frame(tmp_path):
@@ -369,11 +370,20 @@ def test_a_camera_slower_than_the_frame_rate_takes_an_image_every_n_th_frame(tmp
     assert set(zip(projected.frame, projected.camera, strict=True)) == seen
 
 
-def test_a_camera_the_rig_lacks_is_named_with_its_key(tmp_path):
-    scenario = Scenario.model_validate({"name": "t", "render": {"visibility": False},
-                                        "sensor": {"latency": {"by_camera_s": {"CAM_MIDDLE": 0.1}}}})
-    with pytest.raises(ScenarioError, match="sensor.latency.by_camera_s: rig 'surround6' has no camera 'CAM_MIDDLE'"):
-        generate(scenario, seed=0, out=tmp_path / "x", frames=2)
+@pytest.mark.parametrize(("sensor", "frames", "expected"), [
+    ({"latency": {"by_camera_s": {"CAM_MIDDLE": 0.1}}}, 2,
+     "sensor.latency.by_camera_s: rig 'surround6' has no camera 'CAM_MIDDLE'"),
+    ({"capture": {"trigger": "sweep", "order": ["CAM_FRONT", "CAM_BACK"]}}, 2,
+     "sensor.capture.order: names 2 of the rig's 6 cameras (not CAM_FRONT_LEFT, CAM_BACK_LEFT, CAM_BACK_RIGHT, "
+     "CAM_FRONT_RIGHT); name every camera"),
+    ({"latency": {"fixed_s": 5.0}}, 10,  # the scenario's 200 frames would do; the 10 asked for would not
+     "sensor.latency.fixed_s: a latency of 5 s is longer than the run (10 frames, 1 s)"),
+])
+def test_settings_that_depend_on_the_rig_or_the_run_are_checked_before_any_work(tmp_path, sensor, frames, expected):
+    scenario = Scenario.model_validate({"name": "t", "render": {"visibility": False}, "sensor": sensor})
+    with pytest.raises(ScenarioError) as caught:
+        generate(scenario, seed=0, out=tmp_path / "x", frames=frames)
+    assert expected in str(caught.value), caught.value
     assert not (tmp_path / "x").exists()
 
 
@@ -485,3 +495,21 @@ high = 1.0
     assert (scenario.sensor.capture.spread_s, scenario.sensor.latency.fixed_s,
             scenario.sensor.ego_pose.drift_m_per_sqrt_s) == (0.07, 0.25, 0.5)
     assert scenario.sensor.capture.trigger == "sweep"  # the base scenario's own settings kept
+
+
+def test_the_dataset_summary_says_how_late_the_detections_are(timed):
+    _, dataset, _ = timed
+    captures = _table(dataset, "captures").set_index(["frame", "camera"])["arrival_frame"]
+    detections = _table(dataset, "detections")
+    arrival = captures.loc[list(zip(detections.frame, detections.camera, strict=True))].to_numpy()
+    late, never = int((arrival > detections.frame.to_numpy()).sum()), int((arrival >= dataset.frame_count).sum())
+    line = next(line for line in dataset.summary().splitlines() if line.startswith("timing"))
+    assert f"{late} of {len(detections)} detections late, {never} after the last frame" in line
+    assert "ego pose estimated" in line and late > 0
+    assert not any(line.startswith("timing") for line in load_summary_of_synchronous(timed).splitlines())
+
+
+def load_summary_of_synchronous(timed) -> str:
+    _, _, folder = timed
+    scenario = load_scenario("highway_surround6")
+    return Dataset.open(generate(scenario, seed=1, out=folder / "sync-summary", frames=2).path).summary()

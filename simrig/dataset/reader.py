@@ -405,8 +405,34 @@ class Dataset:
                 embeddings=embedding_matrix(table.column("embedding"), dimension),
             )
 
+    def _timing_summary(self) -> list[str]:
+        """The ``timing`` line of :meth:`summary` for a dataset with capture timing (none otherwise): the spread
+        of the capture times, how many detections arrive late or never, the ego-pose error."""
+        parts = []
+        if self.has_table("captures"):
+            captures = self.columns("captures")
+            frame = captures.column("frame").to_numpy()
+            fired = captures.column("fired").to_numpy(zero_copy_only=False)
+            offset = (captures.column("capture_time").to_numpy() - frame / float(self.scenario["frame_rate_hz"]))[fired]
+            codes = {name: code for code, name in enumerate(self.rig.camera_names)}
+            arrival = captures.column("arrival_frame").to_numpy()  # rows by frame, then camera (rig order)
+            detections = self.columns("detections", ["frame", "camera"])
+            captured = detections.column("frame").to_numpy().astype(np.int64)
+            when = arrival[captured * len(codes) + string_codes(detections.column("camera"), codes,
+                                                                  f"{self.path}: detections camera")]
+            late = int((when > captured).sum())
+            never = int((when >= self.frame_count).sum())
+            parts.append(f"captures {1000 * offset.min():+.0f} to {1000 * offset.max():+.0f} ms after the tick"
+                         f"{'' if fired.all() else f', {int((~fired).sum())} camera-frames without an image'}; "
+                         f"{late} of {len(when)} detections late, {never} after the last frame")
+        if self.has_table("ego_estimates"):
+            true, given = self.columns("ego_poses"), self.columns("ego_estimates")
+            error = np.hypot(*(given.column(axis).to_numpy() - true.column(axis).to_numpy() for axis in "xy"))
+            parts.append(f"ego pose estimated (position error up to {error.max():.2f} m)")
+        return [f"timing    {'; '.join(parts)}"] if parts else []
+
     def summary(self) -> str:
-        """A few readable lines: scenario, seed, frames, actors, rig, rows, events."""
+        """A few readable lines: scenario, seed, frames, actors, rig, rows, events, capture timing."""
         truth = self.columns("ground_truth", ["frame", "actor_id", "class"])
         ids = truth.column("actor_id").to_numpy()
         class_counts = {}
@@ -447,6 +473,7 @@ class Dataset:
              f"visibility {self.manifest.get('visibility', 'not measured')}") if self.source is None
             else "sensor    none (an imported dataset holds ground truth only)",
             f"events    {event_text or 'none'}",
+            *self._timing_summary(),
         ]
         source = self.source
         if source is not None:

@@ -149,6 +149,25 @@ def _draw_bev(axis, dataset: Dataset, state: GroundTruthFrame, detections, track
     axis.tick_params(labelsize=7)
 
 
+def _capture_offsets(dataset: Dataset, frame: int) -> dict[str, float] | None:
+    """Per camera, its capture time minus the frame's tick [s] (NaN: it took no image), for a dataset with capture
+    timing; ``None`` otherwise."""
+    truth = dataset.ground_truth
+    if truth.capture_offsets is None:
+        return None
+    row = truth.capture_offsets[int(np.searchsorted(truth.frames, frame))]
+    return dict(zip(truth.rig.camera_names, row.tolist(), strict=True))
+
+
+def _capture_note(offsets: dict[str, float] | None, name: str) -> str:
+    """`` (+25 ms)`` after a camera's name when it fired after the tick; `` (no image)`` when it skipped the frame;
+    nothing on a synchronous rig."""
+    if offsets is None:
+        return ""
+    offset = offsets[name]
+    return " (no image)" if not np.isfinite(offset) else f" ({1000 * offset:+.0f} ms)"
+
+
 def render_mosaic(dataset_path: Path | str, frame: int, out: Path | str, tracks: Path | str | None = None) -> Path:
     """Write the mosaic PNG of ``frame`` of the dataset at ``dataset_path`` to ``out`` (with ``tracks``, a
     tracker's output in any format ``simrig score`` reads, drawn too); returns ``out``."""
@@ -159,6 +178,7 @@ def render_mosaic(dataset_path: Path | str, frame: int, out: Path | str, tracks:
     images = _camera_images(dataset, state)
     detections = _detections(dataset, frame)
     tracks2d, tracks3d = _frame_tracks(dataset, tracks, frame)
+    offsets = _capture_offsets(dataset, frame)
     # an imported dataset may have no cameras (3D only) or no 3D ground truth (2D only): draw what it has
     layout = _layout(dataset.rig.camera_names) if dataset.has_2d else []
     rows, columns = max(len(layout), 1), max((len(row) for row in layout), default=0)
@@ -185,8 +205,8 @@ def render_mosaic(dataset_path: Path | str, frame: int, out: Path | str, tracks:
                                          linewidth=1.8, linestyle=":"))
                 axis.text(x1, y1 - 3, f"T{track_id}", fontsize=5, color=track_colour(track_id), va="bottom")
             tracked = f", {len(tracks2d.get(name, []))} tracks" if tracks is not None else ""
-            axis.set_title(f"{name}: {int(truth.in_view.sum())} in view, {len(detections.get(name, []))} detections"
-                           f"{tracked}", fontsize=8)
+            axis.set_title(f"{name}{_capture_note(offsets, name)}: {int(truth.in_view.sum())} in view, "
+                           f"{len(detections.get(name, []))} detections{tracked}", fontsize=8)
             axis.set_axis_off()
     if bev:
         _draw_bev(figure.add_subplot(grid[:, columns]), dataset, state, detections, tracks3d)

@@ -22,8 +22,9 @@ from simrig.pipeline.content_keys import world_key
 from simrig.pipeline.recorded_world import RecordedWorld
 from simrig.render.visibility import Visibility
 from simrig.rig import build_rig, rig_to_dict
-from simrig.scenarios import Scenario
+from simrig.scenarios import Scenario, ScenarioError
 from simrig.scenarios.perturbation_schema import WORLD_KINDS
+from simrig.scenarios.timing_schema import latency_beyond
 from simrig.seeding import RandomStreams
 from simrig.sensor.model import SensorModel
 from simrig.types import GroundTruthFrame
@@ -83,6 +84,9 @@ def generate(
     frames = scenario.frames if frames is None else frames
     if not isinstance(frames, int) or frames < 1:
         raise ValueError(f"frames: must be a positive integer, got {frames!r}")
+    too_late = latency_beyond(scenario, frames)  # checked for the scenario's own length; --frames may be shorter
+    if too_late:
+        raise ScenarioError(too_late)
     out = Path(out)
     if world_from is not None:
         if images:

@@ -62,11 +62,17 @@ def sweep_order(rig: Rig) -> tuple[str, ...]:
 
 
 def check_timing_cameras(sensor, rig: Rig) -> None:
-    """A :class:`~simrig.scenarios.ScenarioError` naming the key when a timing table names a camera ``rig`` lacks."""
+    """A :class:`~simrig.scenarios.ScenarioError` naming the key when a timing table names a camera ``rig`` lacks,
+    or a sweep's ``order`` leaves one of its cameras out."""
     for key, name in timing_camera_names(sensor):
         if name not in rig.camera_names:
             raise ScenarioError(f"{key}: rig {rig.name!r} has no camera {name!r}; cameras: "
                                 f"{', '.join(rig.camera_names)}")
+    order = sensor.capture.order
+    if order and len(order) != len(rig.camera_names):
+        missing = [name for name in rig.camera_names if name not in order]
+        raise ScenarioError(f"sensor.capture.order: names {len(order)} of the rig's {len(rig.camera_names)} cameras "
+                            f"(not {', '.join(missing)}); name every camera, or none for clockwise from the front")
 
 
 class CaptureTiming:
