@@ -370,3 +370,16 @@ def test_the_replay_lines_pythonpath_is_the_folder_the_tracker_was_imported_from
     importlib.import_module(name)
     assert _import_root(f"{name}:T") == tmp_path.resolve()
     assert _import_root("simrig.trackers.saga:saga") is None  # installed (or the checkout): no PYTHONPATH
+
+
+def test_a_run_folder_given_for_a_dataset_is_named_as_such(small_dataset, tmp_path, capsys):
+    import shutil
+
+    from simrig.cli import main
+
+    run = tmp_path / "run"
+    shutil.copytree(Path(small_dataset.path), run / "dataset")
+    assert main(["info", str(run)]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.endswith(f"it looks like a 'simrig run' folder: its dataset is {str(run / 'dataset')!r}")
+    assert len(error.splitlines()) == 1

@@ -115,9 +115,12 @@ class Dataset:
             raise DatasetError(f"dataset folder {str(path)!r} does not exist")
         manifest = read_manifest(path)
         if manifest is None:
+            inner = path / "dataset"
+            hint = (f"; it looks like a 'simrig run' folder: its dataset is {str(inner)!r}"
+                    if (inner / MANIFEST_NAME).is_file() else "")
             raise DatasetError(
                 f"{str(path)!r} holds no complete simrig dataset ({MANIFEST_NAME} missing or not complete; "
-                "an interrupted generation leaves none)"
+                f"an interrupted generation leaves none){hint}"
             )
         dataset = cls(path, manifest)
         if verify:
