@@ -414,7 +414,7 @@ def _moving_car_frames(*, late: bool):
     return rig, frames
 
 
-@pytest.mark.parametrize("name", ["saga", "polymot", "global_hungarian", "mutr3d", "simpletrack", "percam_merge"])
+@pytest.mark.parametrize("name", ["saga", "polymot", "global_hungarian", "mutr3d", "simpletrack"])
 @pytest.mark.parametrize("late", [False, True])
 def test_reference_trackers_predict_tracks_to_each_capture_time(name, late):
     from simrig.trackers import registry

@@ -141,11 +141,8 @@ class KalmanTracker:
             return detections.take(detections.scores >= self.score_threshold)
         return detections
 
-    def step_arrays(self, detections: DetectionArrays, dt: float, now: float | None = None) -> None:
-        """Predict by ``dt`` seconds, associate, update, start and end tracks; ``now``: the frame's time [s], for
-        motion compensation (a coordinator that calls this directly gives it; :meth:`step` sets it)."""
-        if now is not None:
-            self._now = now
+    def step_arrays(self, detections: DetectionArrays, dt: float) -> None:
+        """Predict by ``dt`` seconds, associate, update, start and end tracks."""
         for track in self.tracks:
             track.model.predict(track.kf, dt, self.kalman)
         owner = self.associate(detections)

@@ -51,7 +51,7 @@ class PerCameraMerge:
         dt = self.clock.advance(frame)
         members = []  # (camera, KalmanTrack)
         for camera, tracker in enumerate(self.cameras):
-            tracker.step_arrays(tracker.select(detections.take(detections.cameras == camera)), dt, frame.timestamp)
+            tracker.step_arrays(tracker.select(detections.take(detections.cameras == camera)), dt)
             members.extend((camera, t) for t in tracker.tracks if tracker.life.is_reported(t.life))
         return self._merge(members)
 
@@ -100,15 +100,13 @@ def percam_merge(
     max_age_s: float = 1.0,
     score_threshold: float = 0.0,
     measurement_variance: float = 1.0,
-    motion_compensation: bool = True,
 ) -> PerCameraMerge:
     """merge_iou: BEV IoU at which two cameras' tracks are one object [-]; the rest as for
-    ``global_hungarian`` (each camera's tracker is one, motion compensation included)."""
+    ``global_hungarian`` (each camera's tracker is one)."""
     def camera_tracker() -> KalmanTracker:
         return KalmanTracker(
             **kalman_tracker_parts(cost=cost, gate=gate, life=life, min_hits=min_hits, max_age_s=max_age_s,
-                                   measurement_variance=measurement_variance, score_threshold=score_threshold,
-                                   motion_compensation=motion_compensation),
+                                   measurement_variance=measurement_variance, score_threshold=score_threshold),
             assign=hungarian,
         )
 
