@@ -199,7 +199,8 @@ class Scenario(Strict):
             key = ("jitter_s" if capture.jitter_s and latest - 3.0 * capture.jitter_s < period
                    else "offsets_s" if capture.trigger == "given" else "spread_s")
             raise ValueError(f"sensor.capture.{key}: the last capture of a frame would come {latest:g} s after its "
-                             f"tick (offset + 3 σ of jitter), not within the frame period ({period:g} s = 1 / frame_rate_hz)")
+                             f"tick (offset + 3 σ of jitter), not within the frame period ({period:g} s = "
+                             "1 / frame_rate_hz)")
         for name, rate in capture.rate_hz.items():
             every = self.frame_rate_hz / rate
             if rate > self.frame_rate_hz or abs(every - round(every)) > 1e-9:
