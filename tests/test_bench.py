@@ -126,6 +126,7 @@ def _fragments(out: Path) -> dict[str, int]:
     return {str(path.relative_to(out)): path.stat().st_mtime_ns for path in (out / "fragments").glob("*/*.json")}
 
 
+@pytest.mark.slow  # the default run stays under 10 minutes on 2 cores; CI runs it in the slow pass
 def test_killed_run_resumes_without_redoing_losing_or_duplicating(tmp_path):
     suite = _tiny(tmp_path / "suite")
     reference = run_bench(suite, out=tmp_path / "reference", workers=2)

@@ -9,6 +9,7 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 from terminal import ctrl_c_delivered
 from test_bench import TINY_SCENARIO, TINY_SUITE
 
@@ -80,6 +81,7 @@ def _complete_cells(fragments: dict[str, int]) -> set[str]:
     return {cell for cell in cells if cells.count(cell) == TRACKERS}
 
 
+@pytest.mark.slow  # the default run stays under 10 minutes on 2 cores; CI runs it in the slow pass
 def test_ctrl_c_keeps_finished_cells_says_what_was_lost_and_the_rerun_redoes_none(tmp_path):
     suite = _suite(tmp_path / "suite")
     out = tmp_path / "out"

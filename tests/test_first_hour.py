@@ -326,7 +326,8 @@ def test_generate_prints_the_whole_process_time(tmp_path):
     assert found, done.stdout
     total, start_up, generation = map(float, found.groups())
     assert total <= wall and wall - total < 1.0  # the interpreter's own start and exit are all it leaves out
-    assert abs(total - start_up - generation) <= 0.1 and start_up > 0.2  # the imports are counted
+    # the imports are counted; three values printed to 0.1 s each differ from their exact sum by at most 0.15
+    assert abs(total - start_up - generation) <= 0.15 + 1e-9 and start_up > 0.2
 
 
 def test_the_scorers_hungarian_is_scipys_without_its_package_import():

@@ -209,6 +209,7 @@ def plugin_project(python: str, project, env: dict) -> None:
     assert refused.returncode == 2 and "--trust-file" in refused.stderr and refused.stderr.count("\n") == 1
 
 
+@pytest.mark.slow  # the default run stays under 10 minutes on 2 cores; CI runs it in the slow pass
 def test_plugin_from_a_project_outside_the_repository_writes_a_replay_that_reproduces_the_failure(tmp_path):
     """A project in a temporary folder, using this environment's installed simrig: its failing property shrinks,
     the plugin writes the shrunk scenario and names it in the failure report, ``simrig replay`` reproduces it."""
