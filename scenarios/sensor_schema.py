@@ -10,7 +10,7 @@ from typing import Annotated, Literal
 from pydantic import Field, field_validator, model_serializer, model_validator
 
 from .base import FiniteFloat, NonNegativeFloat, PositiveFloat, Strict
-from .timing_schema import TIMING_TABLES, CaptureConfig, EgoPoseConfig, LatencyConfig
+from .timing_schema import TIMING_TABLES, CaptureConfig, EgoPoseConfig, LatencyConfig, timing_tables_set
 
 Fraction = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
 
@@ -294,9 +294,8 @@ class SensorConfig(Strict):
         settings stores what it stored before the tables existed (same manifest, same content keys)."""
         dumped = handler(self)
         if isinstance(dumped, dict):
-            for name, model in TIMING_TABLES.items():
-                if name in dumped and getattr(self, name) == model():
-                    del dumped[name]
+            for name in set(TIMING_TABLES) - set(timing_tables_set(self)):
+                dumped.pop(name, None)
         return dumped
 
     @field_validator("preset")

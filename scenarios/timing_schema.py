@@ -99,7 +99,13 @@ class EgoPoseConfig(Strict):
 
 TIMING_TABLES: dict[str, type[Strict]] = {"capture": CaptureConfig, "latency": LatencyConfig,
                                           "ego_pose": EgoPoseConfig}
-"""The timing tables under ``[sensor]``, each also the name of its cause group."""
+"""The timing tables under ``[sensor]``, in the order of their cause groups (``trigger``, ``latency``,
+``ego_pose``)."""
+
+
+def timing_tables_set(sensor) -> tuple[str, ...]:
+    """The timing tables of ``sensor`` that differ from their defaults (an ideal rig sets none)."""
+    return tuple(name for name, model in TIMING_TABLES.items() if getattr(sensor, name) != model())
 
 
 def latency_beyond(scenario, frames: int) -> str | None:

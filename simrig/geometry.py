@@ -231,11 +231,9 @@ def project_boxes_at(boxes: np.ndarray, rig: Rig, egos: list[EgoPose], pose_of_b
     world_from_ego = np.array([[ego.moved(float(d)).world_from_ego() for d in row]
                                for ego, row in zip(egos, offsets, strict=True)]).reshape(len(egos), -1, 4, 4)
     transforms = np.linalg.inv(world_from_ego @ _ego_from_cameras(rig))  # (F, C, 4, 4)
-    transforms = np.swapaxes(transforms[pose_of_box], 0, 1).copy()  # (C, N, 4, 4)
     shifts = np.zeros((*delta.shape, 3))
     shifts[..., :2] = np.nan_to_num(boxes[None, :, 7:9]) * delta[..., None]
-    transforms[..., :3, 3] += np.einsum("cnij,cnj->cni", transforms[..., :3, :3], shifts)
-    return _project_boxes_from(boxes, rig, transforms)
+    return _project_boxes_from(boxes, rig, _after_shift(np.swapaxes(transforms[pose_of_box], 0, 1), shifts))
 
 
 def cameras_from_world_at(rig: Rig, egos: list[EgoPose]) -> np.ndarray:
@@ -250,9 +248,15 @@ def project_boxes_per_camera(boxes: np.ndarray, rig: Rig, egos: list[EgoPose], s
     ``shifts[c, n]`` ``(C, N, 3)`` [m, world frame] — the boxes of one frame at every camera's capture time
     (moving a box by Δ before projecting it equals moving the camera by −Δ: one transform per camera and box)."""
     shifts = np.asarray(shifts, dtype=float)
-    transforms = np.broadcast_to(cameras_from_world_at(rig, egos)[:, None], (*shifts.shape[:2], 4, 4)).copy()
-    transforms[..., :3, 3] += np.einsum("cnij,cnj->cni", transforms[..., :3, :3], shifts)
-    return _project_boxes_from(boxes, rig, transforms)
+    transforms = np.broadcast_to(cameras_from_world_at(rig, egos)[:, None], (*shifts.shape[:2], 4, 4))
+    return _project_boxes_from(boxes, rig, _after_shift(transforms, shifts))
+
+
+def _after_shift(transforms: np.ndarray, shifts: np.ndarray) -> np.ndarray:
+    """``(C, N, 4, 4)`` world → camera ``transforms`` applied after moving box ``n`` by ``shifts[c, n]`` [m]."""
+    out = np.array(transforms, copy=True)
+    out[..., :3, 3] += np.einsum("cnij,cnj->cni", out[..., :3, :3], shifts)
+    return out
 
 
 def _project_boxes_from(boxes: np.ndarray, rig: Rig, transforms: np.ndarray) -> Projection:

@@ -84,6 +84,13 @@ class _DetectionChunk:
         """This chunk's rows followed by ``other``'s."""
         return _DetectionChunk(*(np.concatenate([a, b]) for a, b in zip(self._fields(), other._fields(), strict=True)))
 
+    @classmethod
+    def concatenated(cls, chunks: list[_DetectionChunk], dimension: int) -> _DetectionChunk:
+        """The rows of ``chunks`` in order, as one chunk (each array copied once)."""
+        if not chunks:
+            return cls.empty(dimension)
+        return cls(*(np.concatenate(arrays) for arrays in zip(*(chunk._fields() for chunk in chunks), strict=True)))
+
     def from_frame(self, frame: int) -> _DetectionChunk:
         """The rows of ``frame`` and later (views)."""
         lo = int(np.searchsorted(self.frame, frame))
@@ -353,23 +360,16 @@ class Dataset:
         at a dropped frame is given at the next frame that is stepped. Reads the detections whole."""
         dropped = self.columns("frames", ["dropped"]).column("dropped").to_numpy(zero_copy_only=False)
         rig = self.rig
-        c, frames = len(rig.cameras), len(dropped)
-        detections = _DetectionChunk.empty(self._embedding_dimension)
-        for chunk in self._detection_chunks(rig):
-            detections = detections.joined(chunk)
-        captures = self.columns("captures")
-        camera_codes = {name: code for code, name in enumerate(rig.camera_names)}
-        key = (captures.column("frame").to_numpy().astype(np.int64) * c
-               + string_codes(captures.column("camera"), camera_codes, f"{self.path}: captures camera"))
-        if not np.array_equal(key, np.arange(frames * c)):
-            raise DatasetError(f"dataset {str(self.path)!r}: captures does not hold one row per frame and camera")
+        frames = len(dropped)
+        detections = _DetectionChunk.concatenated(list(self._detection_chunks(rig)), self._embedding_dimension)
+        captures = self._captures()
         stepped = np.flatnonzero(~dropped)
         # the first stepped frame at or after each frame (frames: never)
         next_step = np.append(stepped, frames)[np.searchsorted(stepped, np.arange(frames + 1))]
-        rows = detections.frame.astype(np.int64) * c + detections.cameras
-        arrival = next_step[np.minimum(captures.column("arrival_frame").to_numpy().astype(np.int64)[rows], frames)]
+        rows = detections.frame.astype(np.int64) * len(rig.cameras) + detections.cameras
+        arrival = next_step[np.minimum(captures["arrival_frame"][rows], frames)]
         arrival[dropped[detections.frame]] = frames
-        reported = captures.column("reported_time").to_numpy()[rows]
+        reported = captures["reported_time"][rows]
         order = np.lexsort((np.arange(len(rows)), detections.cameras, arrival))
         arrival = arrival[order]
         images = self.image_folder
@@ -408,21 +408,36 @@ class Dataset:
                 embeddings=embedding_matrix(table.column("embedding"), dimension),
             )
 
+    def _captures(self) -> dict[str, np.ndarray]:
+        """The ``captures`` table as arrays indexed by ``frame × C + camera`` (rig order), checked to hold one row
+        per frame and camera in that order."""
+        table = self.columns("captures")
+        c = len(self.rig.cameras)
+        codes = {name: code for code, name in enumerate(self.rig.camera_names)}
+        key = (table.column("frame").to_numpy().astype(np.int64) * c
+               + string_codes(table.column("camera"), codes, f"{self.path}: captures camera"))
+        if not np.array_equal(key, np.arange(self.frame_count * c)):
+            raise DatasetError(f"dataset {str(self.path)!r}: captures does not hold one row per frame and camera")
+        return {"capture_time": table.column("capture_time").to_numpy(),
+                "reported_time": table.column("reported_time").to_numpy(),
+                "arrival_frame": table.column("arrival_frame").to_numpy().astype(np.int64),
+                "fired": table.column("fired").to_numpy(zero_copy_only=False)}
+
     def _timing_summary(self) -> list[str]:
         """The ``timing`` line of :meth:`summary` for a dataset with capture timing (none otherwise): the spread
         of the capture times, how many detections arrive late or never, the ego-pose error."""
         parts = []
         if self.has_table("captures"):
-            captures = self.columns("captures")
-            frame = captures.column("frame").to_numpy()
-            fired = captures.column("fired").to_numpy(zero_copy_only=False)
-            offset = (captures.column("capture_time").to_numpy() - frame / float(self.scenario["frame_rate_hz"]))[fired]
-            codes = {name: code for code, name in enumerate(self.rig.camera_names)}
-            arrival = captures.column("arrival_frame").to_numpy()  # rows by frame, then camera (rig order)
+            captures = self._captures()
+            c = len(self.rig.cameras)
+            fired = captures["fired"]
+            offset = (captures["capture_time"] - np.repeat(np.arange(self.frame_count), c)
+                      / float(self.scenario["frame_rate_hz"]))[fired]
             detections = self.columns("detections", ["frame", "camera"])
             captured = detections.column("frame").to_numpy().astype(np.int64)
-            when = arrival[captured * len(codes) + string_codes(detections.column("camera"), codes,
-                                                                  f"{self.path}: detections camera")]
+            codes = {name: code for code, name in enumerate(self.rig.camera_names)}
+            when = captures["arrival_frame"][captured * c + string_codes(detections.column("camera"), codes,
+                                                                          f"{self.path}: detections camera")]
             late = int((when > captured).sum())
             never = int((when >= self.frame_count).sum())
             parts.append(f"captures {1000 * offset.min():+.0f} to {1000 * offset.max():+.0f} ms after the tick"

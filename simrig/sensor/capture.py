@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simrig.scenarios import ScenarioError
-from simrig.scenarios.timing_schema import CaptureConfig, EgoPoseConfig, LatencyConfig, timing_camera_names
+from simrig.scenarios.timing_schema import EgoPoseConfig, timing_camera_names, timing_tables_set
 
 from ..seeding import RandomStreams
 from ..types import EgoPose, Rig
@@ -85,6 +85,7 @@ class CaptureTiming:
                  removed: frozenset[str] = frozenset()):
         check_timing_cameras(sensor, rig)
         self.capture, self.latency = sensor.capture, sensor.latency
+        self._configured = bool({"capture", "latency"} & set(timing_tables_set(sensor)))
         self.period = 1.0 / frame_rate_hz
         names = rig.camera_names
         c = len(names)
@@ -112,7 +113,7 @@ class CaptureTiming:
     def configured(self) -> bool:
         """Whether the scenario sets any capture or latency setting (its datasets then hold a ``captures``
         table, with the groups removed or not)."""
-        return self.capture != CaptureConfig() or self.latency != LatencyConfig()
+        return self._configured
 
     def at(self, frame: int, tick: float) -> Captures:
         """The captures of ``frame`` (tick ``tick`` [s]); frames are asked for in order, from 0."""

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from simrig.scenarios import Scenario
 from simrig.scenarios.perturbation_schema import WORLD_KINDS
-from simrig.scenarios.timing_schema import TIMING_TABLES
+from simrig.scenarios.timing_schema import TIMING_TABLES, timing_tables_set
 
 from .capture import TIMING_GROUPS
 
@@ -52,9 +52,8 @@ def _window_groups(scenario: Scenario) -> tuple[str, ...]:
 
 def _timing_groups(scenario: Scenario) -> tuple[str, ...]:
     """The capture-timing groups whose table ``scenario`` sets (an ideal rig has none to remove)."""
-    sensor = scenario.sensor
-    return tuple(group for group, (table, model) in zip(TIMING_GROUPS, TIMING_TABLES.items(), strict=True)
-                 if getattr(sensor, table) != model())
+    set_tables = timing_tables_set(scenario.sensor)
+    return tuple(group for group, table in zip(TIMING_GROUPS, TIMING_TABLES, strict=True) if table in set_tables)
 
 
 def all_groups(scenario: Scenario) -> tuple[str, ...]:
