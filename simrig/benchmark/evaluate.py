@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from simrig.pipeline.cache import cached_dataset
 from simrig.pipeline.guard import TrackerFault, TrackerTimeout
 from simrig.pipeline.track import run_tracker
+from simrig.scoring.planner import PLANNER_METRICS
 from simrig.scoring.results import METRICS_2D, METRICS_3D
 from simrig.trackers.registry import register_again
 
@@ -21,7 +22,7 @@ from ..scoring import ScoreReport, score
 from ..scoring.attribution import errors_by_cause
 from .plan import Job
 
-METRIC_COLUMNS = (*(f"3d_{name}" for name in METRICS_3D), *(f"2d_{name}" for name in METRICS_2D))
+METRIC_COLUMNS = (*(f"3d_{name}" for name in (*METRICS_3D, *PLANNER_METRICS)), *(f"2d_{name}" for name in METRICS_2D))
 """Metric columns of the results table: ``3d_`` overall 3D metrics (nuScenes style, null for a tracker scored on
 one camera), ``2d_`` overall 2D metrics (TrackEval style; of that one camera when the tracker names one)."""
 
@@ -93,7 +94,7 @@ def metric_values(report: ScoreReport) -> dict[str, float]:
     """The overall metrics of ``report`` under :data:`METRIC_COLUMNS` names; NaN where absent."""
     overall3d = report.metrics3d["overall"] if report.metrics3d is not None else {}
     overall2d = report.metrics2d["overall"]
-    values = {f"3d_{name}": overall3d.get(name) for name in METRICS_3D}
+    values = {f"3d_{name}": overall3d.get(name) for name in (*METRICS_3D, *PLANNER_METRICS)}
     values |= {f"2d_{name}": overall2d.get(name) for name in METRICS_2D}
     return {name: math.nan if value is None else float(value) for name, value in values.items()}
 

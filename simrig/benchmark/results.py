@@ -93,7 +93,7 @@ def assemble(plan: Plan, out: Path) -> dict[str, pa.Table]:
             cameras += [head | {"camera": camera} | {name: values.get(name) for name in CAMERA_COLUMNS}
                         for camera, values in fragment.get("per_camera", {}).items()]
             settings = {PARAMETER_PREFIX + name: value for name, value in point.settings}
-            rows.append(head | settings | {name: fragment["metrics"][name] for name in METRIC_COLUMNS}
+            rows.append(head | settings | {name: fragment["metrics"].get(name) for name in METRIC_COLUMNS}
                         | {"failure": fragment.get("failure") or None})
             causes += [head | {"dimension": dim, "cause": cause, "kind": kind, "count": count}
                        for dim, cause, kind, count in fragment["causes"]]

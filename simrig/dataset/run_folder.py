@@ -6,7 +6,8 @@ commands that read it (``explain``, ``view``)::
                                   and scored camera when it has any)
     tracks/LABEL/tracker.json     how to build that tracker again: name, parameters, scored camera
     scores/LABEL/score.json       every metric of that run: no wall-clock time, no absolute path, no timestamp
-    scores/LABEL/errors.parquet   every FN/IDS/FRAG with its causes
+    scores/LABEL/errors.parquet   every FN/IDS/FRAG with its causes (and a miss's consequence for the ego's plan)
+    scores/LABEL/plan.parquet     the ego's plan per frame on the ground truth and on the tracks (3D trackers)
     scores/LABEL/report.md        the score table and the command that reproduces it
     scores/LABEL/timings.json     how long generation and the tracker's step() took (machine-dependent)
     explain/LABEL/                what each cause cost that tracker (``simrig explain``)

@@ -37,7 +37,11 @@ from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
 from simrig.reading import read_capped
 from simrig.scenarios.schema import scenario_from_record
 from simrig.scoring.attribution import KINDS
+from simrig.scoring.planner import PLANNER_METRICS
 from simrig.scoring.results import METRICS_2D, METRICS_3D
+
+EXPLAINABLE_3D = (*METRICS_3D, *PLANNER_METRICS)
+"""The 3D metrics a run can be explained on: the nuScenes family and the planner-aware scores."""
 from simrig.sensor.groups import all_groups, present_groups
 
 from ..benchmark.engines import local_map, machine_workers, ray_map
@@ -296,9 +300,9 @@ def choose_metrics(names: list[str] | None, has_3d: bool) -> dict[str, tuple[str
     chosen = {}
     for name in names:
         dimension, _, bare = name.rpartition(":")
-        if dimension == "3d" and has_3d and bare in METRICS_3D or dimension == "2d" and bare in METRICS_2D:
+        if dimension == "3d" and has_3d and bare in EXPLAINABLE_3D or dimension == "2d" and bare in METRICS_2D:
             chosen[name] = (dimension, bare)
-        elif not dimension and has_3d and bare in METRICS_3D:
+        elif not dimension and has_3d and bare in EXPLAINABLE_3D:
             chosen[name] = ("3d", bare)
         elif not dimension and bare in METRICS_2D:
             chosen[name] = ("2d", bare)
@@ -312,7 +316,7 @@ def _metric_choices(has_3d: bool) -> str:
     two_d = ", ".join(METRICS_2D)
     if not has_3d:
         return f"its tracker has no 3D tracks, so choose a 2D metric: {two_d}"
-    return (f"3D: {', '.join(METRICS_3D)}; 2D: {two_d} (a bare name is the 3D metric where both have it; 2d:NAME "
+    return (f"3D: {', '.join(EXPLAINABLE_3D)}; 2D: {two_d} (a bare name is the 3D metric where both have it; 2d:NAME "
             "or 3d:NAME picks the dimension)")
 
 

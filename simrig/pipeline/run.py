@@ -155,6 +155,11 @@ def run_pipeline(
     write_text_atomic(json_path, json.dumps(report.to_dict(), indent=2) + "\n")
     with atomic_file(errors_path) as partial:
         report.write_errors(partial)
+    plan_path = scores / "plan.parquet"
+    if report.plan is not None:
+        report.write_plan(plan_path)
+    elif plan_path.is_file():  # an earlier run's plan, of a tracker run that now has none
+        plan_path.unlink()
     command = _command(scenario, seed, reference or tracker_display(tracker), params, frames, camera, images)
     write_text_atomic(markdown, f"## {loaded.name}, seed {seed}, tracker {tracker}\n\n"
                                  f"Produced by `{command}`.\n\n```\n{report.table()}\n```\n")

@@ -27,6 +27,7 @@ from .counts import combine
 from .hota import HOTA
 from .identity import Identity
 from .inputs import camera_sequences, class_sequences
+from .planner import PLANNER_METRICS, PlanningRoad, planner_road_of, planner_scores
 
 LOOKBACK_S = 1.0
 """[s] an identity switch is also tagged with the causes of this long before it (see attribution)."""
@@ -83,9 +84,10 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
                           "(imported 3D ground truth only): score 3D tracks on it")
     lookback = int(round(lookback_s * float(dataset.scenario["frame_rate_hz"])))
     errors = []
-    metrics3d = metrics2d = None
+    metrics3d = metrics2d = plan = None
     if tracks.tracks3d is not None and camera is None and dataset.has_3d:
         metrics3d, errors3d = _score_3d(truth, tracks, lookback, interpolation)
+        errors3d, plan = _planner(metrics3d, errors3d, planner_road_of(dataset), truth, tracks.tracks3d)
         errors.append(errors3d)
     if dataset.has_2d:
         if has_2d_tracks:
@@ -102,7 +104,7 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     return ScoreReport(
         dataset=str(dataset.path), tracks=tracks.source, scenario=dataset.scenario["name"], seed=dataset.seed,
         metrics3d=metrics3d, metrics2d=metrics2d,
-        errors=pa.concat_tables(errors) if errors else ERRORS_SCHEMA.empty_table(),
+        errors=pa.concat_tables(errors) if errors else ERRORS_SCHEMA.empty_table(), plan=plan,
         settings={"lookback_s": lookback_s, **({"camera": camera} if camera is not None else {}), **ground_truth,
                   "interpolation": interpolation,
                   "evaluation": config.model_dump(mode="json")},
@@ -131,6 +133,29 @@ def _score_3d(truth: GroundTruth, tracks: TrackSet, lookback: int, interpolation
             errors.append(attributor.tag(seq.label, "", "3d", _events_3d(seq, result.best)))
     overall = combine_classes(per_class, METRICS_3D)
     return {"overall": overall, "per_class": per_class}, _concat(errors)
+
+
+def _planner(metrics3d: dict, errors3d: pa.Table, road: PlanningRoad | None, truth: GroundTruth,
+             tracks3d) -> tuple[pa.Table, pa.Table | None]:
+    """Adds the planner-aware scores (:mod:`simrig.scoring.planner`) to ``metrics3d["overall"]`` (NaN, with a note
+    under ``metrics3d["planner"]``, for a dataset simrig did not simulate) and each 3D miss's consequence to the
+    errors; returns the errors and the per-frame plan table (None when not scored)."""
+    if road is None:
+        metrics3d["overall"].update(dict.fromkeys(PLANNER_METRICS, float("nan")))
+        metrics3d["planner"] = {"scored": False, "note": "not scored: the dataset was not simulated by simrig, so "
+                                "there is no ego planner to ask"}
+        return errors3d, None
+    kinds = errors3d.column("kind").to_numpy(zero_copy_only=False)
+    frames = errors3d.column("frame").to_numpy()
+    actors = errors3d.column("actor_id").to_numpy()
+    misses = np.flatnonzero(kinds == "FN")
+    scores = planner_scores(road, truth, tracks3d, np.column_stack([frames[misses], actors[misses]]))
+    weight = errors3d.column("consequence").to_numpy(zero_copy_only=False).copy()
+    weight[misses] = [scores.consequence.get((int(frames[i]), int(actors[i])), 0.0) for i in misses]
+    metrics3d["overall"].update(scores.metrics)
+    metrics3d["planner"] = {"scored": True}
+    index = errors3d.schema.get_field_index("consequence")
+    return errors3d.set_column(index, "consequence", pa.array(weight, pa.float64())), scores.frames
 
 
 def _events_3d(seq: BevSequence, best: Accumulation | None) -> ClearEvents:

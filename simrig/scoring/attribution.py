@@ -46,11 +46,13 @@ ERRORS_SCHEMA = pa.schema([
     pa.field("dimension", pa.string()), pa.field("kind", pa.string()), pa.field("frame", pa.int32()),
     pa.field("camera", pa.string()), pa.field("class", pa.string()), pa.field("actor_id", pa.int64()),
     pa.field("track_id", pa.int64()), pa.field("previous_track_id", pa.int64()),
-    pa.field("causes", pa.list_(pa.string())),
+    pa.field("causes", pa.list_(pa.string())), pa.field("consequence", pa.float64()),
 ])
 """One row per error: ``dimension`` 3d or 2d; ``kind`` FN, IDS or FRAG (or IGN: an ignored box left
 untracked); ``camera`` empty in 3D; track ids −1
-where they do not apply (an FN has none; FRAG gives the track that resumed)."""
+where they do not apply (an FN has none; FRAG gives the track that resumed). ``consequence`` [nats]: how much
+missing that vehicle alone changes the ego's plan (3D FN only, :mod:`simrig.scoring.planner`; NaN where not
+weighed)."""
 
 
 @dataclass(frozen=True)
@@ -88,7 +90,7 @@ class Attributor:
             "dimension": [dimension] * n, "kind": kinds, "frame": frames.astype(np.int32),
             "camera": [camera] * n, "class": [label] * n, "actor_id": actors.astype(np.int64),
             "track_id": tracks.astype(np.int64), "previous_track_id": previous.astype(np.int64),
-            "causes": causes,
+            "causes": causes, "consequence": np.full(n, np.nan),
         }, schema=ERRORS_SCHEMA)
 
     def tag_ignored(self, label: str, camera: str, misses: np.ndarray, rules: np.ndarray) -> pa.Table:
@@ -105,7 +107,7 @@ class Attributor:
             "dimension": ["2d"] * n, "kind": [IGNORED_KIND] * n, "frame": misses[:, 0].astype(np.int32),
             "camera": [camera] * n, "class": [label] * n, "actor_id": misses[:, 1].astype(np.int64),
             "track_id": np.full(n, -1, dtype=np.int64), "previous_track_id": np.full(n, -1, dtype=np.int64),
-            "causes": causes,
+            "causes": causes, "consequence": np.full(n, np.nan),
         }, schema=ERRORS_SCHEMA)
 
     def _window(self, actor: int, first: int, last: int, *, handover_from: int, handover_to: int | None = None

@@ -74,7 +74,9 @@ def _sequence(truth: GroundTruth, tracks2d: TrackRows, camera: str, c: int, labe
                               tracks2d.frame[t], tracks2d.track_id[t], tracks2d.boxes[t])
 
 
-def _in_range(truth: GroundTruth, frame: np.ndarray, label: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+def in_class_range(truth: GroundTruth, frame: np.ndarray, label: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """Which rows (frame numbers, class names ``(n,)``, world boxes ``(n, ≥2)``) lie within their class's evaluation
+    range of the ego (:data:`~simrig.classes.CLASS_RANGE_M`, as the nuScenes devkit keeps them)."""
     limit = per_label(label, lambda name: CLASS_RANGE_M[ActorClass(name)])
     return truth.distance_from_ego(frame, boxes[:, :2]) < limit
 
@@ -83,8 +85,8 @@ def class_sequences(truth: GroundTruth, tracks3d: TrackRows, interpolation: str 
     """One BEV sequence per class present on either side (within the class range). ``interpolation``: how the
     gaps inside each ground-truth and tracker track are filled first (:mod:`simrig.formats.nuscenes.interpolation`;
     ``devkit``: as the nuScenes devkit as shipped)."""
-    gt_keep = np.nonzero(_in_range(truth, truth.frame, truth.label, truth.boxes))[0]
-    track_keep = np.nonzero(_in_range(truth, tracks3d.frame, tracks3d.label, tracks3d.boxes))[0]
+    gt_keep = np.nonzero(in_class_range(truth, truth.frame, truth.label, truth.boxes))[0]
+    track_keep = np.nonzero(in_class_range(truth, tracks3d.frame, tracks3d.label, tracks3d.boxes))[0]
     track_ids, inverse = np.unique(tracks3d.track_id[track_keep], return_inverse=True)
     mean_score = _track_means(inverse, tracks3d.score[track_keep], len(track_ids))
     gt = _Rows(truth.frame[gt_keep], truth.actor_id[gt_keep], truth.label[gt_keep], truth.boxes[gt_keep][:, :2],

@@ -13,6 +13,7 @@ import pyarrow.parquet as pq
 
 from simrig.dataset.outputs import atomic_file, write_text_atomic
 from simrig.scoring.attribution import IGNORED, errors_by_cause
+from simrig.scoring.planner import PLANNER_METRICS
 
 METRICS_3D = ("AMOTA", "AMOTP", "MOTAR", "MOTA", "MOTP", "RECALL", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN",
               "ATVE", "TVE")
@@ -29,7 +30,7 @@ IGNORED_COLUMNS = ("boxes", "ignored", "range", "height", "visibility", "truncat
 """Per camera: ground-truth boxes in view, how many are ignored, and by each rule (a box may break several;
 ``source``: a distractor and ``unevaluated``: not evaluated, as an imported dataset's source marks it);
 ``delivered``: the scored (not ignored) boxes the camera's detector reported."""
-COUNT_METRICS = {"IDS", "FRAG", "MT", "ML", "TP", "FP", "FN", "IDSW", "Frag", "PT", "CLR_TP", "CLR_FN", "CLR_FP"}
+COUNT_METRICS = {"LANE", "HZ_MISS", "HZ_FAKE", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN", "IDSW", "Frag", "PT", "CLR_TP", "CLR_FN", "CLR_FP"}
 
 
 @dataclass
@@ -42,6 +43,9 @@ class ScoreReport:
     ``per_camera``: boxes in view, ignored, ignored by each rule, and ``delivered``: scored boxes the detector
     reported) and ``source`` (``tracks2d`` or
     ``projected 3D tracks``). errors: one row per error (:data:`~simrig.scoring.attribution.ERRORS_SCHEMA`).
+    metrics3d's ``overall`` also holds the planner-aware scores (:data:`~simrig.scoring.planner.PLANNER_METRICS`)
+    and ``planner`` says whether they were scored; plan: the ego's plan per frame on the ground truth and on the
+    tracks (:data:`~simrig.scoring.planner.PLAN_SCHEMA`; None when not scored).
     """
 
     dataset: str
@@ -52,6 +56,7 @@ class ScoreReport:
     metrics2d: dict | None
     errors: pa.Table
     settings: dict = field(default_factory=dict)
+    plan: pa.Table | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready: metric values with NaN as None."""
@@ -69,6 +74,11 @@ class ScoreReport:
         with atomic_file(Path(path)) as temporary:
             pq.write_table(self.errors, temporary)
 
+    def write_plan(self, path: Path | str) -> None:
+        """The ego's plan per frame on the ground truth and on the tracks, as Parquet (atomically)."""
+        with atomic_file(Path(path)) as temporary:
+            pq.write_table(self.plan, temporary)
+
     def table(self) -> str:
         """The readable summary ``simrig score`` prints."""
         lines = [f"dataset   {self.dataset} ({self.scenario}, seed {self.seed})", f"tracks    {self.tracks}"]
@@ -77,8 +87,11 @@ class ScoreReport:
             lines += ["", "3D (BEV centre distance < 2 m; class ranges 50 m, motorcycle, pedestrian, bicycle 40 m; "
                           f"{filled})"]
             lines += _grid(METRICS_3D, {"overall": self.metrics3d["overall"], **self.metrics3d["per_class"]})
+            lines += ["", *_planner_lines(self.metrics3d)]
         elif self.settings.get("ground_truth") == "2d only":
             lines += ["", "3D: not scored (the dataset's ground truth is 2D only)"]
+        if self.metrics3d is None and self.metrics2d is not None and self.metrics2d.get("source") == "tracks2d":
+            lines += ["", "Planner-aware: not scored (2D tracks: the ego's planner needs 3D tracks)"]
         if self.metrics2d is None:
             lines += ["", "2D: not scored (the dataset has no cameras)"]
             return "\n".join(lines + _error_lines(self.errors))
@@ -93,6 +106,16 @@ class ScoreReport:
                       "detector reported"]
             lines += _grid(IGNORED_COLUMNS, {"overall": truth["overall"], **truth["per_camera"]})
         return "\n".join(lines + _error_lines(self.errors))
+
+
+def _planner_lines(metrics3d: dict) -> list[str]:
+    """The planner-aware block of the readable summary (:mod:`simrig.scoring.planner`)."""
+    planner = metrics3d.get("planner", {})
+    if not planner.get("scored"):
+        return [f"Planner-aware: {planner.get('note', 'not scored')}"]
+    return ["Planner-aware, open loop (the ego's IDM/MOBIL on the ground truth vs on the tracks; PKL [nats/frame], "
+            "dACC [m/s²], LANE, HZ_MISS, HZ_FAKE [frames])",
+            *_grid(PLANNER_METRICS, {"overall": metrics3d["overall"]})]
 
 
 def _error_lines(errors: pa.Table) -> list[str]:

@@ -42,6 +42,8 @@ from simrig.scenarios.schema import TrafficConfig
 
 from ..road import RoadMarkings
 from ..types import ActorClass, EgoPose, GroundTruthFrame
+from .ego_planner import drive_on_perception
+from .phantoms import phantoms_from_boxes
 from .vehicles import VEHICLE_TYPES, SimrigVehicle
 
 SPAWN_CLEARANCE_M = 10.0
@@ -82,6 +84,9 @@ class TrafficWorld:
 
     ``env_seed`` seeds highway-env (its road and vehicle randomness); ``rng`` drives simrig's own choices
     (where and which vehicles appear). Both come from the scenario seed (:mod:`simrig.seeding`).
+
+    ``ego_on_perception`` (closed loop): the ego's planner decides on what :meth:`perceive` last gave it instead of
+    the real vehicles (:func:`~simrig.world.ego_planner.drive_on_perception`); everything else sees the real road.
     """
 
     def __init__(
@@ -92,8 +97,10 @@ class TrafficWorld:
         env_seed: int,
         rng: np.random.Generator,
         scripted: tuple[tuple[int, Occluder | CutIn], ...] = (),
+        ego_on_perception: bool = False,
     ):
         self.config = config
+        self._ego_on_perception = ego_on_perception
         self._scripted = [(index, script, script.frame_window(frame_rate_hz)) for index, script in scripted]
         self._script_vehicles: dict[int, SimrigVehicle] = {}
         self.frame_rate_hz = frame_rate_hz
@@ -136,6 +143,8 @@ class TrafficWorld:
         )
         road.vehicles = [self.ego]
         env.controlled_vehicles = [self.ego]
+        if self._ego_on_perception:
+            drive_on_perception(self.ego)
         self._lanes = road.network.lanes_list()
         self._lane_indices = [
             (start, end, index)
@@ -174,6 +183,24 @@ class TrafficWorld:
 
     def close(self) -> None:
         self.env.close()
+
+    # ------------------------------------------------------------------ the ego's planner
+    def perceive(self, boxes: np.ndarray, idents: np.ndarray) -> None:
+        """What the ego's planner decides on at the next :meth:`step` (closed loop, ``ego_on_perception``): world
+        boxes ``(N, 9)`` (:data:`~simrig.types.BOX3D_FIELDS`) with their ``idents`` ``(N,)``."""
+        if not self._ego_on_perception:
+            raise RuntimeError("TrafficWorld.perceive(): the world was not built with ego_on_perception")
+        self.ego.perceived = phantoms_from_boxes(self.env.unwrapped.road, boxes, idents)
+
+    def planning_road(self):
+        """The scenario's road with no vehicle on it, and the ego's planned route at the start (highway-env lane
+        indices; None on a road without routes): what a planner query on recorded frames needs
+        (:func:`~simrig.world.ego_planner.planning_ego`). Call instead of :meth:`reset`."""
+        self.env.reset(seed=self._env_seed)
+        env = self.env.unwrapped
+        route = env.vehicle.route
+        env.road.vehicles = []
+        return env.road, (list(route) if route else None)
 
     # ------------------------------------------------------------------ traffic window
     def _others(self) -> list:

@@ -1,0 +1,179 @@
+"""Planner-aware scores (open loop): does a tracking error change what the car would do?
+
+At every frame the ego's own planner (highway-env's IDM + MOBIL, :mod:`simrig.world.ego_planner`) is asked twice
+from the ego's true pose: once on the ground truth, once on the tracker's 3D tracks, each as
+:mod:`~simrig.world.phantoms` (position, velocity, size). Both sides keep what the 3D scores keep: boxes within their
+class's evaluation range of the ego (:func:`~simrig.scoring.inputs.in_class_range`, 50 m for cars), so the
+ground-truth planner sees what a perfect perception of that range would give it. MOBIL decides at every frame
+(its 1 s timer is ignored), so every frame has a lane decision to compare. A frame without tracks (a dropped sensor
+frame) is planned on an empty road, as the 3D scores count its ground truth missed.
+
+Per frame: the commanded acceleration on each side [m/s²], the lane decision (−1 left, 0 keep, +1 right), the
+vehicle each reacts to, and the divergence between the two plans. Over the run (:data:`PLANNER_METRICS`):
+
+* ``PKL`` [nats per frame]: the mean per-frame Kullback–Leibler divergence KL(π_truth ‖ π_tracks) between the
+  planner's action distributions, after "Learning to Evaluate Perception Models Using Planner-Centric Metrics"
+  (Philion, Kar, Fidler, CVPR 2020), whose PKL is KL(planner | ground truth ‖ planner | detections) averaged over
+  samples. Their planner is learned and outputs a distribution over future positions; ours is rule-based and
+  deterministic, so the distribution is stated here as an **action noise model**: the executed acceleration is
+  Gaussian around the command with σ = :data:`ACTION_NOISE_MPS2`, and the lane action is the decided one with
+  probability 1 − :data:`LANE_SLIP`, each of the two others with :data:`LANE_SLIP` / 2. Then
+  KL = Δa² / (2σ²) + [lane decisions differ] · (1 − 1.5 ε) · ln(2 (1 − ε) / ε) (3.36 nats at ε = 0.05, the same as
+  Δa = 2.6 m/s²). Unlike the paper's, this divergence is over one step's action, not 4 s of future positions.
+* ``dACC`` [m/s²]: mean |a_tracks − a_truth|.
+* ``LANE``: frames whose lane decisions differ.
+* ``HZ_MISS``: frames with a **missed hazard** — the ground-truth plan brakes for its leader (it commands at least
+  :data:`HAZARD_MPS2` less than IDM's free-road acceleration) and the track-fed plan commands at least
+  :data:`HAZARD_MPS2` more than it.
+* ``HZ_FAKE``: frames with an **invented hazard** — the track-fed plan commands at least :data:`HAZARD_MPS2` less
+  than the ground-truth plan (it brakes for a vehicle that is not there, or nearer or slower than it is).
+
+**Consequence of each error.** A missed vehicle (a 3D FN at a frame) weighs the divergence between the plan on the
+ground truth and the plan on the ground truth without that vehicle: what missing it alone would change. A vehicle
+the ground-truth plan does not read (not the leader or follower in the ego's lane or a side lane) weighs exactly 0,
+since removing it leaves every neighbour search, and so the plan, unchanged. Identity switches and fragmentations
+are not weighed (NaN): the planner keeps no memory of identities, so an identity error changes its plan only through
+the box it leaves behind, which the frame's divergence already counts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow as pa
+
+from simrig.dataset import Dataset
+from simrig.dataset.ground_truth import GroundTruth
+from simrig.dataset.tracks_file import TrackRows
+from simrig.scenarios.schema import TrafficConfig
+from simrig.seeding import RandomStreams
+from simrig.world import TrafficWorld
+from simrig.world.ego_planner import EgoPlan, plan, planning_ego
+from simrig.world.phantoms import phantoms_from_boxes
+from simrig.world.traffic import EGO_CLASS
+from simrig.world.vehicles import VEHICLE_TYPES
+
+from .inputs import in_class_range
+
+ACTION_NOISE_MPS2 = 1.0
+"""[m/s²] σ of the executed acceleration around the planner's command (the action noise model of ``PKL``)."""
+LANE_SLIP = 0.05
+"""[-] probability that the lane action is not the decided one (shared by the two others; the ``PKL`` model)."""
+HAZARD_MPS2 = 1.0
+"""[m/s²] how much harder (or softer) the track-fed plan must brake than the ground-truth plan to count a hazard
+invented (or missed): a third of IDM's comfortable acceleration (3 m/s²), an easily felt change of command."""
+PLANNER_METRICS = ("PKL", "dACC", "LANE", "HZ_MISS", "HZ_FAKE")
+"""The run's planner-aware scores (module docstring)."""
+PLAN_SCHEMA = pa.schema([
+    pa.field("frame", pa.int32()), pa.field("acceleration_truth", pa.float64()),
+    pa.field("acceleration_tracks", pa.float64()), pa.field("lane_change_truth", pa.int8()),
+    pa.field("lane_change_tracks", pa.int8()), pa.field("leader_truth", pa.int64()),
+    pa.field("leader_tracks", pa.int64()), pa.field("divergence", pa.float64()), pa.field("hazard", pa.string()),
+])
+"""One row per frame: each side's command [m/s²] and lane decision, the actor id the ground-truth plan follows and
+the track id the track-fed plan follows (−1: free road), their divergence [nats] and ``hazard`` (``missed``,
+``invented`` or empty)."""
+_LANE_DIVERGENCE = (1.0 - 1.5 * LANE_SLIP) * np.log(2.0 * (1.0 - LANE_SLIP) / LANE_SLIP)
+
+
+def divergence(acceleration_p: np.ndarray, lane_p: np.ndarray, acceleration_q: np.ndarray,
+               lane_q: np.ndarray) -> np.ndarray:
+    """KL(π_p ‖ π_q) [nats] of the action noise model (module docstring) for plans p and q given as commanded
+    accelerations [m/s²] and lane decisions (−1, 0, +1); broadcasts.
+
+    >>> float(divergence(np.array(1.0), np.array(0), np.array(0.0), np.array(0)))
+    0.5
+    >>> round(float(divergence(np.array(0.0), np.array(-1), np.array(0.0), np.array(0))), 3)
+    3.365
+    """
+    gaussian = (np.asarray(acceleration_p) - np.asarray(acceleration_q)) ** 2 / (2.0 * ACTION_NOISE_MPS2**2)
+    return gaussian + _LANE_DIVERGENCE * (np.asarray(lane_p) != np.asarray(lane_q))
+
+
+@dataclass(frozen=True)
+class PlannerScores:
+    """The open-loop planner-aware scores of one run: ``metrics`` (:data:`PLANNER_METRICS`), ``frames``
+    (:data:`PLAN_SCHEMA`) and ``consequence``: the weight [nats] of each missed (frame, actor id) pair the
+    ground-truth plan reads (every other miss weighs 0)."""
+
+    metrics: dict[str, float]
+    frames: pa.Table
+    consequence: dict[tuple[int, int], float]
+
+
+class PlanningRoad:
+    """The road of a simrig-generated dataset, empty, and the ego's planner on it: the scenario's traffic settings
+    and seed give highway-env's road and the ego's initial route, without simulating any traffic."""
+
+    def __init__(self, traffic: TrafficConfig, frame_rate_hz: float, seed: int):
+        world = TrafficWorld(traffic, frame_rate_hz, env_seed=RandomStreams(seed).integer_seed("traffic"),
+                             rng=np.random.default_rng(0))
+        self.road, self.route = world.planning_road()
+        self._world = world  # keeps highway-env's environment (and its road) alive
+        self.target_speed = traffic.ego_speed_mps
+
+    def ego(self, pose):
+        """The ego's planner at ``pose`` (:func:`~simrig.world.ego_planner.planning_ego`)."""
+        return planning_ego(self.road, VEHICLE_TYPES[EGO_CLASS], pose, self.target_speed, self.route)
+
+    def plan(self, ego, boxes: np.ndarray, idents: np.ndarray) -> EgoPlan:
+        return plan(ego, phantoms_from_boxes(self.road, boxes, idents), self.road)
+
+
+def planner_road_of(dataset: Dataset) -> PlanningRoad | None:
+    """The planning road of ``dataset``; None for a dataset simrig did not simulate (an imported one)."""
+    if dataset.source is not None:
+        return None
+    scenario = dataset.scenario
+    return PlanningRoad(TrafficConfig.model_validate(scenario["traffic"]), float(scenario["frame_rate_hz"]),
+                        dataset.seed)
+
+
+def planner_scores(road: PlanningRoad, truth: GroundTruth, tracks3d: TrackRows, misses: np.ndarray) -> PlannerScores:
+    """Open-loop planner-aware scores of ``tracks3d`` (world frame, relative to the true ego) against ``truth``;
+    ``misses`` ``(n, 2)``: the (frame, actor id) of every 3D FN, to be weighed (module docstring)."""
+    gt_rows = np.flatnonzero(in_class_range(truth, truth.frame, truth.label, truth.boxes))
+    track_rows = np.flatnonzero(in_class_range(truth, tracks3d.frame, tracks3d.label, tracks3d.boxes))
+    gt_bounds = np.searchsorted(truth.frame[gt_rows], np.stack([truth.frames, truth.frames + 1]))
+    track_bounds = np.searchsorted(tracks3d.frame[track_rows], np.stack([truth.frames, truth.frames + 1]))
+    missed_at: dict[int, set[int]] = {}
+    for frame, actor in np.asarray(misses, dtype=np.int64).reshape(-1, 2).tolist():
+        missed_at.setdefault(frame, set()).add(actor)
+    f = len(truth.frames)
+    a_truth, a_tracks, free = np.zeros(f), np.zeros(f), np.zeros(f)
+    lane_truth, lane_tracks = np.zeros(f, np.int8), np.zeros(f, np.int8)
+    leader_truth, leader_tracks = np.full(f, -1, np.int64), np.full(f, -1, np.int64)
+    consequence: dict[tuple[int, int], float] = {}
+    for position, frame in enumerate(truth.frames.tolist()):
+        ego = road.ego(truth.egos[position])
+        g = gt_rows[gt_bounds[0, position]:gt_bounds[1, position]]
+        t = track_rows[track_bounds[0, position]:track_bounds[1, position]]
+        on_truth = road.plan(ego, truth.boxes[g], truth.actor_id[g])
+        on_tracks = road.plan(ego, tracks3d.boxes[t], tracks3d.track_id[t])
+        a_truth[position], a_tracks[position], free[position] = (on_truth.acceleration, on_tracks.acceleration,
+                                                                 on_truth.free_acceleration)
+        lane_truth[position], lane_tracks[position] = on_truth.lane_change, on_tracks.lane_change
+        leader_truth[position], leader_tracks[position] = on_truth.leader, on_tracks.leader
+        for actor in sorted(missed_at.get(frame, set()) & on_truth.read):
+            keep = g[truth.actor_id[g] != actor]
+            without = road.plan(ego, truth.boxes[keep], truth.actor_id[keep])
+            consequence[(frame, actor)] = float(divergence(on_truth.acceleration, on_truth.lane_change,
+                                                           without.acceleration, without.lane_change))
+    kl = divergence(a_truth, lane_truth, a_tracks, lane_tracks)
+    missed = (free - a_truth >= HAZARD_MPS2) & (a_tracks - a_truth >= HAZARD_MPS2)
+    invented = a_truth - a_tracks >= HAZARD_MPS2
+    hazard = np.where(missed, "missed", np.where(invented, "invented", ""))
+    frames = pa.table({
+        "frame": truth.frames.astype(np.int32), "acceleration_truth": a_truth, "acceleration_tracks": a_tracks,
+        "lane_change_truth": lane_truth, "lane_change_tracks": lane_tracks, "leader_truth": leader_truth,
+        "leader_tracks": leader_tracks, "divergence": kl, "hazard": hazard.astype(str),
+    }, schema=PLAN_SCHEMA)
+    metrics = {
+        "PKL": float(kl.mean()) if f else float("nan"),
+        "dACC": float(np.abs(a_tracks - a_truth).mean()) if f else float("nan"),
+        "LANE": int((lane_truth != lane_tracks).sum()),
+        "HZ_MISS": int(missed.sum()),
+        "HZ_FAKE": int(invented.sum()),
+    }
+    return PlannerScores(metrics, frames, consequence)

@@ -1,0 +1,127 @@
+"""Phantom vehicles: what a perception output (a tracker's tracks, or the ground truth) looks like to highway-env's
+IDM/MOBIL planner, without being part of the simulated world.
+
+A :class:`Phantom` is a highway-env ``ControlledVehicle`` made from a world-frame 3D box: the planner finds it,
+follows it and checks lane changes against it exactly as it would a real vehicle, but it is never stepped, never
+collides and is never put on the road for good. What IDM/MOBIL read from a vehicle (highway-env 1.12
+``behavior.py``, ``road.py``; measured in the issue-31 research notes): the position (neighbour search), the
+velocity and heading (the projected speed difference of the desired gap), ``LENGTH`` (simrig's bumper-to-bumper gap,
+:mod:`simrig.world.vehicles`), and, when the phantom is the follower in MOBIL's safety check, ``target_speed`` and
+its lane. A phantom's own target speed cannot be known from a box: it is taken as its current speed (the follower
+neither speeds up nor slows down of its own accord), which with simrig's politeness 0 enters only that safety check.
+A phantom has no lane-change intent (its target lane is its lane).
+
+Frames: boxes come in simrig's world frame (:data:`~simrig.types.BOX3D_FIELDS`: x, y [m], yaw [rad] counter-clockwise,
+vx, vy [m/s], y to the left); highway-env's y points right, so a phantom sits at (x, −y) with heading −yaw and
+velocity (vx, −vy) — the inverse of :mod:`simrig.world.traffic`'s conversion, done here and nowhere else.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from highway_env.road.lane import StraightLane
+from highway_env.road.road import Road
+from highway_env.vehicle.controller import ControlledVehicle
+from highway_env.vehicle.objects import Landmark
+
+
+class Phantom(ControlledVehicle):
+    """A vehicle made from one box, for planner queries only (module docstring).
+
+    ``Vehicle.__init__`` is not called: its closest-lane search (≈ 20 µs a vehicle) is needed only for the few
+    phantoms MOBIL asks for their lane, so ``lane_index`` is found on first use. ``ident``: the track id or
+    actor id the phantom stands for (−1 when none)."""
+
+    def __init__(self, road: Road, position: np.ndarray, heading: float, velocity: np.ndarray, length: float,
+                 width: float, ident: int = -1):
+        self.road = road
+        self.position = position
+        self.heading = heading
+        self._velocity = velocity
+        self.speed = float(velocity[0] * np.cos(heading) + velocity[1] * np.sin(heading))  # [m/s] along the heading
+        self.LENGTH = length
+        self.WIDTH = width
+        self.target_speed = self.speed
+        self._lane_index = None
+        self.route = None
+        self.crashed = False
+        self.ident = ident
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """[m/s] highway-env frame (not speed × direction: a track's velocity need not follow its yaw)."""
+        return self._velocity
+
+    @property
+    def lane_index(self):
+        if self._lane_index is None:
+            self._lane_index = self.road.network.get_closest_lane_index(self.position, self.heading)
+        return self._lane_index
+
+    @property
+    def lane(self):
+        return self.road.network.get_lane(self.lane_index)
+
+    @property
+    def target_lane_index(self):
+        return self.lane_index  # no lane-change intent
+
+    def __repr__(self) -> str:
+        return f"Phantom#{self.ident}({self.position[0]:.1f}, {self.position[1]:.1f})"
+
+
+def phantoms_from_boxes(road: Road, boxes: np.ndarray, idents: np.ndarray) -> list[Phantom]:
+    """Phantoms of world-frame boxes ``(N, 9)`` (:data:`~simrig.types.BOX3D_FIELDS`) with their ``idents``
+    ``(N,)`` on ``road``, in highway-env's frame."""
+    boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 9)
+    positions = np.column_stack([boxes[:, 0], -boxes[:, 1]])
+    velocities = np.column_stack([boxes[:, 7], -boxes[:, 8]])
+    headings = (-boxes[:, 6]).tolist()
+    lengths, widths = boxes[:, 3].tolist(), boxes[:, 4].tolist()
+    return [Phantom(road, positions[i], headings[i], velocities[i], lengths[i], widths[i], int(ident))
+            for i, ident in enumerate(np.asarray(idents).tolist())]
+
+
+class PhantomRoad(Road):
+    """A stand-in road for one planner query: the real road's network, a given vehicle list (the planning ego and
+    phantoms), and highway-env's neighbour search done with numpy on straight lanes.
+
+    Same answer as ``Road.neighbour_vehicles`` (the research notes checked 2,400 queries on four maps: identical
+    plans): a vehicle is in a lane when its centre is within half the lane width + 1 m of the centre line and
+    between 5 m before the lane's start and 5 m past its end; the front vehicle is the nearest at or ahead of the
+    ego's longitudinal position (the last of equals, as highway-env's loop keeps), the rear the nearest behind
+    (the first of equals). Curved lanes, and roads that search connected lanes, use highway-env's own loop.
+    ``read`` collects every vehicle a query returned: the vehicles the plan depended on."""
+
+    def __init__(self, real: Road, vehicles: list):
+        self.network = real.network
+        self.vehicles = vehicles
+        self.objects = [o for o in real.objects if not isinstance(o, Landmark)]
+        self.np_random = real.np_random
+        self.record_history = False
+        self.neighbour_vehicles_connected_lanes = real.neighbour_vehicles_connected_lanes
+        self.read: list = []
+        self._movers = self.vehicles + self.objects
+        self._positions = np.array([v.position for v in self._movers], dtype=np.float64).reshape(-1, 2)
+
+    def neighbour_vehicles(self, vehicle, lane_index=None) -> tuple:
+        lane_index = lane_index or vehicle.lane_index
+        if not lane_index:
+            return None, None
+        lane = self.network.get_lane(lane_index)
+        if self.neighbour_vehicles_connected_lanes or type(lane) is not StraightLane:
+            front, rear = Road.neighbour_vehicles(self, vehicle, lane_index)
+        else:
+            s = lane.local_coordinates(vehicle.position)[0]
+            delta = self._positions - lane.start
+            along = delta @ lane.direction
+            across = delta @ lane.direction_lateral
+            inside = ((np.abs(across) <= lane.width / 2 + 1) & (-lane.VEHICLE_LENGTH <= along)
+                      & (along < lane.length + lane.VEHICLE_LENGTH))
+            inside &= np.fromiter((v is not vehicle for v in self._movers), bool, len(self._movers))
+            ahead = np.flatnonzero(inside & (along >= s))
+            behind = np.flatnonzero(inside & (along < s))
+            front = self._movers[ahead[::-1][np.argmin(along[ahead][::-1])]] if ahead.size else None
+            rear = self._movers[behind[np.argmax(along[behind])]] if behind.size else None
+        self.read.extend(v for v in (front, rear) if v is not None)
+        return front, rear
