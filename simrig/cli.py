@@ -441,6 +441,38 @@ def _register_run(commands) -> None:
     run.set_defaults(run=_cmd_run)
 
 
+def _register_drive(commands) -> None:
+    drive = commands.add_parser(
+        "drive", help="closed loop: drive the ego on a tracker's output and on the ground truth; compare outcomes")
+    _scenario_arguments(drive)
+    _tracker_arguments(drive)
+    drive.add_argument("--out", type=Path, default=None,
+                       help="drive folder (default: runs/drive/SCENARIO-seedSEED); holds reference/, drives/LABEL/, "
+                            "report.md")
+    drive.add_argument("--quiet", action="store_true", help="no progress bar")
+    drive.set_defaults(run=_cmd_drive)
+
+
+def _cmd_drive(args: argparse.Namespace) -> int:
+    from simrig.names import path_part
+    from simrig.pipeline.drive import drive_folder
+
+    with _naming_scenario_file(args.scenario):
+        scenario = load_scenario(args.scenario)
+    out = args.out or Path("runs") / "drive" / f"{path_part(scenario.name, 'scenario name')}-seed{args.seed}"
+    result = drive_folder(scenario, seed=args.seed, tracker=args.tracker, params=_params(args.param), out=out,
+                          frames=args.frames, progress=not args.quiet,
+                          frame_time_limit_s=args.frame_time_limit)
+    if result.reused:
+        print(f"reference reusing the ground-truth drive in {result.reference.dataset}\n")
+    print(result.report.read_text(encoding="utf-8"))
+    print(f"wrote     {result.tracked.dataset.parent}")
+    if not result.reused:
+        print(f"wrote     {result.reference.dataset.parent}")
+    print(f"wrote     {result.report}")
+    return 0
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from simrig.pipeline.run import run_pipeline
 
@@ -707,7 +739,7 @@ def build_parser() -> argparse.ArgumentParser:
 COMMANDS = (_register_generate, _register_scenarios, _register_info, _register_render, _register_view,
             _register_score, _register_replay, _register_export, _register_import, _register_track,
             _register_trackers, _register_bench, _register_search, _register_report, _register_run,
-            _register_explain)
+            _register_drive, _register_explain)
 """The commands in the order ``simrig --help`` lists them (``detector`` last, from :mod:`simrig.detector.cli`)."""
 
 

@@ -34,6 +34,12 @@ from .manifest_files import ManifestFiles
 from .tables import ALL_SCHEMAS, OPTIONAL_SCHEMAS
 
 
+def frame_detections(table: pa.Table, frame: int, rig: Rig, dimension: int) -> DetectionArrays:
+    """What a tracker is given for ``frame`` from a ``detections`` table holding that frame's rows (as written,
+    before the dataset exists: the closed-loop drive), exactly as :meth:`Dataset.sensor_frames` gives it."""
+    return _DetectionChunk.of_table(table, rig, dimension, f"frame {frame}: detections").frame_arrays(frame)
+
+
 def _stack(table: pa.Table, names: tuple[str, ...]) -> np.ndarray:
     """``(rows, len(names))`` float array of the named columns (``(0, len(names))`` for an empty table)."""
     return np.column_stack([table.column(name).to_numpy() for name in names])
@@ -71,6 +77,22 @@ class _DetectionChunk:
     labels: np.ndarray
     cameras: np.ndarray
     embeddings: np.ndarray
+
+    @classmethod
+    def of_table(cls, table: pa.Table, rig: Rig, dimension: int, where: str) -> _DetectionChunk:
+        """The rows of a ``detections`` table (:data:`~simrig.dataset.tables.DETECTIONS` columns) with embeddings of
+        ``dimension`` values; ``where`` names the table in an error."""
+        camera_codes = {name: code for code, name in enumerate(rig.camera_names)}
+        label_codes = {label.value: code for code, label in enumerate(LABELS)}
+        return cls(
+            frame=table.column("frame").to_numpy(),
+            boxes3d=_stack(table, BOX3D_FIELDS),
+            boxes2d=_stack(table, BOX2D_FIELDS),
+            scores=table.column("score").to_numpy(),
+            labels=string_codes(table.column("label"), label_codes, f"{where} label"),
+            cameras=string_codes(table.column("camera"), camera_codes, f"{where} camera"),
+            embeddings=embedding_matrix(table.column("embedding"), dimension),
+        )
 
     @classmethod
     def empty(cls, dimension: int) -> _DetectionChunk:
@@ -394,19 +416,9 @@ class Dataset:
 
     def _detection_chunks(self, rig: Rig) -> Iterator[_DetectionChunk]:
         """The detections table a row group at a time, as the arrays a tracker is given."""
-        camera_codes = {name: code for code, name in enumerate(rig.camera_names)}
-        label_codes = {label.value: code for code, label in enumerate(LABELS)}
         dimension = self._embedding_dimension
         for table in self.batches("detections"):
-            yield _DetectionChunk(
-                frame=table.column("frame").to_numpy(),
-                boxes3d=_stack(table, BOX3D_FIELDS),
-                boxes2d=_stack(table, BOX2D_FIELDS),
-                scores=table.column("score").to_numpy(),
-                labels=string_codes(table.column("label"), label_codes, f"{self.path}: detections label"),
-                cameras=string_codes(table.column("camera"), camera_codes, f"{self.path}: detections camera"),
-                embeddings=embedding_matrix(table.column("embedding"), dimension),
-            )
+            yield _DetectionChunk.of_table(table, rig, dimension, f"{self.path}: detections")
 
     def _captures(self) -> dict[str, np.ndarray]:
         """The ``captures`` table as arrays indexed by ``frame × C + camera`` (rig order), checked to hold one row

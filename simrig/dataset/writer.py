@@ -88,6 +88,13 @@ def _concatenate(chunks: list, arrow_type: pa.DataType) -> pa.Array:
     return pa.array(np.concatenate(chunks), type=arrow_type)
 
 
+def arrow_table(name: str, chunks: list[dict]) -> pa.Table:
+    """Table ``name`` (:data:`~simrig.dataset.tables.ALL_SCHEMAS`) of per-frame column chunks, as it is written."""
+    schema = ALL_SCHEMAS[name]
+    return pa.Table.from_arrays([_concatenate([chunk[field.name] for chunk in chunks], field.type)
+                                 for field in schema], schema=schema)
+
+
 class DatasetWriter:
     """Streams frames into Parquet tables in a partial folder and publishes it on :meth:`commit`.
 
@@ -147,8 +154,7 @@ class DatasetWriter:
             schema = ALL_SCHEMAS[name]
             if not chunks:
                 continue
-            arrays = [_concatenate([chunk[field.name] for chunk in chunks], field.type) for field in schema]
-            table = pa.Table.from_arrays(arrays, schema=schema)
+            table = arrow_table(name, chunks)
             if name not in self._writers:
                 self._writers[name] = pq.ParquetWriter(self.partial / f"{name}.parquet", schema)
             self._writers[name].write_table(table)

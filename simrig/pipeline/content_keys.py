@@ -58,3 +58,11 @@ def world_key(scenario: Scenario, seed: int, frames: int | None) -> str:
                  "simrig": __version__}
     text = json.dumps(identity, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:KEY_LENGTH]
+
+
+def drive_key(scenario: Scenario, seed: int, frames: int | None, drive: dict) -> str:
+    """The world key of a closed-loop drive (:mod:`simrig.pipeline.drive`): its world depends on everything — the
+    detector's draws and the tracker steer the ego — so the key is the dataset's key with the drive's record."""
+    text = json.dumps({"dataset": dataset_key(scenario, seed, frames), "drive": drive}, sort_keys=True,
+                      separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:KEY_LENGTH]

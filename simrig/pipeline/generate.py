@@ -9,6 +9,9 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Protocol
+
+import numpy as np
 
 from tqdm import tqdm
 
@@ -18,7 +21,7 @@ from simrig.dataset.tables import frame_columns
 from simrig.errors import DatasetError
 from simrig.geometry import Projection, project_boxes
 from simrig.interrupts import stop_if_interrupted
-from simrig.pipeline.content_keys import world_key
+from simrig.pipeline.content_keys import drive_key, world_key
 from simrig.pipeline.recorded_world import RecordedWorld
 from simrig.render.visibility import Visibility
 from simrig.rig import build_rig, rig_to_dict
@@ -31,6 +34,15 @@ from simrig.types import GroundTruthFrame
 from simrig.world import TrafficWorld
 
 
+class Driver(Protocol):
+    """What decides the ego's perception in a closed-loop generation (:mod:`simrig.pipeline.drive`)."""
+
+    record: dict
+
+    def decide(self, state: GroundTruthFrame, columns: dict[str, dict]) -> tuple[np.ndarray, np.ndarray]:
+        """World boxes ``(N, 9)`` and idents ``(N,)`` the ego's planner perceives for the next step."""
+
+
 @dataclass
 class StageTimes:
     """Wall-clock seconds spent per stage of a generation run."""
@@ -39,6 +51,7 @@ class StageTimes:
     projection: float = 0.0
     visibility: float = 0.0
     sensor: float = 0.0
+    driving: float = 0.0
     images: float = 0.0
     writing: float = 0.0
     total: float = 0.0
@@ -64,6 +77,7 @@ def generate(
     progress: bool = False,
     world_from: Dataset | None = None,
     removed: frozenset[str] = frozenset(),
+    driver: Driver | None = None,
 ) -> GenerateResult:
     """Generate the dataset of ``scenario`` with ``seed`` into ``out``; ``frames`` defaults to the scenario's.
 
@@ -80,6 +94,11 @@ def generate(
     ``removed``: cause groups of the detector switched off (:mod:`simrig.sensor.groups`) — a counterfactual
     dataset whose every other random draw is the one of the dataset with all causes on; its manifest records
     them under ``removed_causes`` (absent when none are removed).
+
+    ``driver`` (closed loop, :mod:`simrig.pipeline.drive`): after each frame is written, it is given the frame and
+    its columns and answers what the ego's planner perceives for the next step (world boxes and idents); the
+    ego then drives on that instead of the real vehicles. Its ``record`` goes into the manifest under ``drive``,
+    and the world key covers everything (the world then depends on the detector and the tracker too).
     """
     frames = scenario.frames if frames is None else frames
     if not isinstance(frames, int) or frames < 1:
@@ -88,6 +107,8 @@ def generate(
     if too_late:
         raise ScenarioError(too_late)
     out = Path(out)
+    if world_from is not None and driver is not None:
+        raise ValueError("driver: a closed-loop drive simulates its own world; it cannot reuse one (world_from)")
     if world_from is not None:
         if images:
             raise ValueError("images: cannot be written when the world is reused (world_from); generate in full")
@@ -100,8 +121,8 @@ def generate(
     sensor = SensorModel(scenario, rig, streams, removed=removed)
     times = StageTimes()
     started = time.perf_counter()
-    world = (_SimulatedWorld(scenario, rig, streams, images) if world_from is None
-             else RecordedWorld(world_from, rig))
+    world = (_SimulatedWorld(scenario, rig, streams, images, ego_on_perception=driver is not None)
+             if world_from is None else RecordedWorld(world_from, rig))
     events: list[dict] = []
     try:
         with DatasetWriter(out, overwrite=overwrite) as writer:
@@ -128,8 +149,13 @@ def generate(
                     times.images += time.perf_counter() - tick
 
                 tick = time.perf_counter()
-                writer.write_frame(frame_columns(state, visibility, output, rig.camera_names))
+                columns = frame_columns(state, visibility, output, rig.camera_names)
+                writer.write_frame(columns)
                 times.writing += time.perf_counter() - tick
+                if driver is not None:
+                    tick = time.perf_counter()
+                    world.traffic.perceive(*driver.decide(state, columns))
+                    times.driving += time.perf_counter() - tick
             tick = time.perf_counter()
             manifest = writer.commit(
                 {
@@ -140,8 +166,10 @@ def generate(
                     "visibility": "rendered" if scenario.render.visibility else "not measured",
                     "versions": package_versions(),
                     "events": events,
-                    "world_key": world_key(scenario, seed, frames),
+                    "world_key": (world_key(scenario, seed, frames) if driver is None
+                                  else drive_key(scenario, seed, frames, driver.record)),
                     **({"removed_causes": sorted(removed)} if removed else {}),
+                    **({"drive": driver.record} if driver is not None else {}),
                 }
             )
             times.writing += time.perf_counter() - tick
@@ -154,7 +182,7 @@ def generate(
 class _SimulatedWorld:
     """The world of a full generation: highway-env traffic, analytic projection, rendered visibility."""
 
-    def __init__(self, scenario: Scenario, rig, streams: RandomStreams, images: bool):
+    def __init__(self, scenario: Scenario, rig, streams: RandomStreams, images: bool, ego_on_perception: bool = False):
         self.scenario, self.rig, self.images = scenario, rig, images
         self.traffic = TrafficWorld(
             scenario.traffic,
@@ -162,6 +190,7 @@ class _SimulatedWorld:
             env_seed=streams.integer_seed("traffic"),
             rng=streams.generator("population"),
             scripted=tuple((i, p) for i, p in enumerate(scenario.perturbations) if p.kind in WORLD_KINDS),
+            ego_on_perception=ego_on_perception,
         )
         self.markings = self.scene = self.meter = None
 

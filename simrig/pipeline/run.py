@@ -59,13 +59,13 @@ LABEL_LIMIT = 80
 """[characters] a run label longer than this keeps the tracker's name and the key alone."""
 
 
-def _run_label(tracker: str, params: dict | None, camera: str | None) -> str:
+def run_label(tracker: str, params: dict | None, camera: str | None) -> str:
     """The folder name of a tracker run: the tracker's name, then each parameter as ``KEY=VALUE`` and the
     camera (characters other than letters, digits, ``_.=-`` replaced), then an 8-digit key of the parameters and
     camera, which keeps two runs apart whose readable parts look alike; past :data:`LABEL_LIMIT` characters,
     the name and the key alone.
 
-    >>> _run_label("saga", None, None), _run_label("saga", {"gate": 4}, None)
+    >>> run_label("saga", None, None), run_label("saga", {"gate": 4}, None)
     ('saga', 'saga-gate=4-fb0d72d1')
     """
     name = re.sub(r"[^\w.-]", "_", tracker)
@@ -144,7 +144,7 @@ def run_pipeline(
         generation_s = time.perf_counter() - started
     dataset = Dataset.open(folder)
     reference = tracker if isinstance(tracker, str) else tracker_reference(tracker)
-    label = _run_label(reference or tracker_display(tracker), params, camera)
+    label = run_label(reference or tracker_display(tracker), params, camera)
     tracking = run_tracker(dataset, tracker, out / TRACKS_DIR / label, params, frame_time_limit_s=frame_time_limit_s)
     _record_tracker(tracking.out, tracker, params, camera)
     report = score(dataset, tracking.tracks, camera=camera)  # scored in memory; the folder is for the user
@@ -160,7 +160,7 @@ def run_pipeline(
         report.write_plan(plan_path)
     elif plan_path.is_file():  # an earlier run's plan, of a tracker run that now has none
         plan_path.unlink()
-    command = _command(scenario, seed, reference or tracker_display(tracker), params, frames, camera, images)
+    command = command_line(scenario, seed, reference or tracker_display(tracker), params, frames, camera, images)
     write_text_atomic(markdown, f"## {loaded.name}, seed {seed}, tracker {tracker}\n\n"
                                  f"Produced by `{command}`.\n\n```\n{report.table()}\n```\n")
     write_json_atomic(scores / "timings.json", {
@@ -201,9 +201,10 @@ def _index(out: Path) -> str:
             + "\n".join(sections))
 
 
-def _command(scenario, seed, tracker, params, frames, camera=None, images=False) -> str:
-    """The command that reproduces a run, with ``--out`` left for the reader (no path in a results file)."""
-    words = ["simrig", "run", str(scenario.name if isinstance(scenario, Scenario) else scenario),
+def command_line(scenario, seed, tracker, params, frames, camera=None, images=False, verb: str = "run") -> str:
+    """The command that reproduces a run (or a ``drive``: ``verb``), with ``--out`` left for the reader (no path in
+    a results file)."""
+    words = ["simrig", verb, str(scenario.name if isinstance(scenario, Scenario) else scenario),
              "--seed", str(seed), "--tracker", tracker]
     for key, value in (params or {}).items():
         words += ["--param", f"{key}={value}"]

@@ -122,7 +122,7 @@ def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = No
     tracker = build_tracker(name, params)
     label = tracker_display(name)
     cameras = dataset.rig.camera_names
-    with _guarded(label, "reset()", frame_time_limit_s):
+    with guarded_call(label, "reset()", frame_time_limit_s):
         tracker.reset(rig=dataset.rig, seed=dataset.seed if seed is None else seed)
     finish = getattr(tracker, "finish", None)
     semi_online = callable(finish)
@@ -133,7 +133,7 @@ def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = No
         stop_if_interrupted()
         start = time.perf_counter()
         try:
-            with _guarded(label, f"frame {frame.frame}: step()", frame_time_limit_s):
+            with guarded_call(label, f"frame {frame.frame}: step()", frame_time_limit_s):
                 tracks = tracker.step(frame)
         except TrackerInputError as error:
             raise TrackingError(f"tracker {name!r}: {error}") from None
@@ -148,7 +148,7 @@ def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = No
     if semi_online:  # a semi-online tracker's final word on every frame (it may revise the past)
         start = time.perf_counter()
         limit = frame_time_limit_s * max(len(kept), 1) if frame_time_limit_s else None
-        with _guarded(label, "finish()", limit):
+        with guarded_call(label, "finish()", limit):
             revised = finish()
             revised = dict(revised)
         elapsed += time.perf_counter() - start
@@ -165,7 +165,7 @@ def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = No
 
 
 @contextmanager
-def _guarded(tracker: str, call: str, seconds: float | None) -> Iterator[None]:
+def guarded_call(tracker: str, call: str, seconds: float | None) -> Iterator[None]:
     """The tracker's ``call`` under a time limit; anything it raises (but its own input complaint) becomes a
     :class:`TrackerFault` naming tracker and call, with the original exception chained."""
     try:

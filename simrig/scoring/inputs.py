@@ -76,9 +76,13 @@ def _sequence(truth: GroundTruth, tracks2d: TrackRows, camera: str, c: int, labe
 
 def in_class_range(truth: GroundTruth, frame: np.ndarray, label: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     """Which rows (frame numbers, class names ``(n,)``, world boxes ``(n, ≥2)``) lie within their class's evaluation
-    range of the ego (:data:`~simrig.classes.CLASS_RANGE_M`, as the nuScenes devkit keeps them)."""
-    limit = per_label(label, lambda name: CLASS_RANGE_M[ActorClass(name)])
-    return truth.distance_from_ego(frame, boxes[:, :2]) < limit
+    range of the ego (:data:`CLASS_RANGE_M`, as the nuScenes devkit keeps them)."""
+    return truth.distance_from_ego(frame, boxes[:, :2]) < class_ranges(label)
+
+
+def class_ranges(label: np.ndarray) -> np.ndarray:
+    """``(n,)`` [m] the evaluation range of each class name (:data:`CLASS_RANGE_M`)."""
+    return per_label(label, lambda name: CLASS_RANGE_M[ActorClass(name)])
 
 
 def class_sequences(truth: GroundTruth, tracks3d: TrackRows, interpolation: str = "none") -> list[BevSequence]:

@@ -1,0 +1,129 @@
+"""Closed loop (issue 31): the ego driven by its planner on a tracker's output, inside the simulation."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from simrig.classes import CLASS_SPECS
+from simrig.dataset import Dataset
+from simrig.pipeline.drive import DriveError, drive
+from simrig.pipeline.guard import TrackerFault
+from simrig.scenarios import load_scenario
+from simrig.scenarios.overrides import with_setting
+from simrig.scoring.drive_outcome import drive_outcome
+from simrig.types import ActorClass, Box3D, EgoPose, Track
+
+FRAMES = 60
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    """``cut_in`` without rendered visibility (the drive's logic does not depend on it; it is faster)."""
+    return with_setting(load_scenario("cut_in"), "render.visibility", False)
+
+
+@pytest.fixture(scope="module")
+def reference(scenario, tmp_path_factory):
+    out = tmp_path_factory.mktemp("drive") / "reference"
+    return drive(scenario, seed=4, out=out, frames=FRAMES)
+
+
+class _Replay:
+    """A "tracker" that reports the ground truth of a recorded dataset at each frame: perfect 3D tracks."""
+
+    def __init__(self, dataset: Dataset):
+        self.truth = dataset.ground_truth
+
+    def reset(self, *, rig, seed=None):
+        pass
+
+    def step(self, frame):
+        rows = np.flatnonzero(self.truth.frame == frame.frame)
+        return [Track(int(self.truth.actor_id[r]), ActorClass(self.truth.label[r]), 1.0,
+                      Box3D(*self.truth.boxes[r].tolist())) for r in rows]
+
+
+def _tables(folder) -> dict[str, bytes]:
+    return {path.name: path.read_bytes() for path in sorted(folder.glob("*.parquet"))}
+
+
+def test_perfect_tracks_drive_exactly_as_the_ground_truth(scenario, reference, tmp_path):
+    """(c) A tracker reporting the reference drive's ground truth drives the same world: every table of the
+    dataset is the same bytes (the manifests differ only in who perceived)."""
+    replayed = drive(scenario, seed=4, out=tmp_path / "replay", frames=FRAMES,
+                     tracker=_Replay(Dataset.open(reference.dataset)))
+    assert _tables(replayed.dataset) == _tables(reference.dataset)
+    assert replayed.outcome == reference.outcome
+    assert Dataset.open(reference.dataset).manifest["drive"] == {"perception": "ground truth"}
+
+
+def test_a_tracker_drives_another_world_and_the_same_one_twice_in_another_process(scenario, reference, tmp_path):
+    """A reference tracker changes the ego's drive (its world differs from the ground-truth drive's), and the
+    same drive in a fresh process writes the same bytes, manifest included."""
+    first = drive(scenario, seed=4, out=tmp_path / "one", frames=FRAMES, tracker="global_hungarian")
+    assert _tables(first.dataset)["ground_truth.parquet"] != _tables(reference.dataset)["ground_truth.parquet"]
+    code = (
+        "from simrig.pipeline.drive import drive; from simrig.scenarios import load_scenario;"
+        "from simrig.scenarios.overrides import with_setting;"
+        "s = with_setting(load_scenario('cut_in'), 'render.visibility', False);"
+        f"drive(s, seed=4, out={str(tmp_path / 'two')!r}, frames={FRAMES}, tracker='global_hungarian')"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+    for name in ("dataset", "tracks"):
+        here = {p.relative_to(tmp_path / "one"): p.read_bytes() for p in sorted((tmp_path / "one" / name).rglob("*"))
+                if p.is_file()}
+        there = {p.relative_to(tmp_path / "two"): p.read_bytes() for p in sorted((tmp_path / "two" / name).rglob("*"))
+                 if p.is_file()}
+        assert here == there and here, name
+
+
+def test_a_2d_tracker_or_a_timed_sensor_cannot_drive_and_says_why(scenario, tmp_path):
+    with pytest.raises(DriveError, match=r"tracker 'sort': frame \d+: track \d+ has no 3D box.*2D tracker cannot"):
+        drive(scenario, seed=4, out=tmp_path / "sort", frames=FRAMES, tracker="sort")
+    assert not (tmp_path / "sort" / "dataset").exists()  # nothing half-written left
+    timed = with_setting(scenario, "sensor.latency.fixed_s", 0.05)
+    with pytest.raises(DriveError, match=r"\[sensor.latency\] is set"):
+        drive(timed, seed=4, out=tmp_path / "timed", frames=FRAMES, tracker="saga")
+    assert not (tmp_path / "timed").exists()
+
+
+class _NanVelocity(_Replay):
+    def step(self, frame):
+        tracks = super().step(frame)
+        if tracks:
+            box = tracks[0].box3d
+            tracks[0] = Track(tracks[0].track_id, tracks[0].label, 1.0, Box3D(*box.as_array()[:7], math.nan, 0.0))
+        return tracks
+
+
+def test_a_tracker_with_nan_velocity_gets_one_line_naming_the_frame_and_field(scenario, reference, tmp_path):
+    with pytest.raises(TrackerFault, match=r"frame 0: .*box3d has a non-finite value"):
+        drive(scenario, seed=4, out=tmp_path / "nan", frames=FRAMES, tracker=_NanVelocity(Dataset.open(reference.dataset)))
+
+
+def test_outcome_by_hand():
+    """Ego at 20 m/s, a car 30 m ahead (centres) at 10 m/s, in the same lane: bumper gap 30 − 4.6 = 25.4 m closing
+    at 10 m/s, TTC 2.54 s; a frame later both moved 0.1 s and the ego braked to 19.5 m/s (5 m/s², hard); a truck
+    beside the ego (4 m across, overlapping no footprint) is not in its path."""
+    car, truck = CLASS_SPECS[ActorClass.CAR], CLASS_SPECS[ActorClass.TRUCK]
+
+    def box(x, y, spec, speed):
+        return [x, y, spec.height / 2, spec.length, spec.width, spec.height, 0.0, speed, 0.0]
+
+    truth = SimpleNamespace(
+        frames=np.array([0, 1]), timestamps=np.array([0.0, 0.1]), events=((), ()),
+        egos=(EgoPose(0.0, 0.0, 0.0, 0.0, 20.0, 0.0), EgoPose(2.0, 0.0, 0.0, 0.0, 19.5, 0.0)),
+        frame=np.array([0, 0, 1]),
+        boxes=np.array([box(30.0, 0.0, car, 10.0), box(0.0, 4.0, truck, 0.0), box(31.0, 0.0, car, 10.0)]),
+    )
+    outcome = drive_outcome(truth)
+    gap1 = 31.0 - 2.0 - car.length
+    assert outcome.min_ttc_s == pytest.approx(min(25.4 / 10.0, gap1 / 9.5))
+    assert outcome.hard_brakes == (0,) and outcome.near_misses == () and outcome.collisions == 0
+    assert outcome.progress_m == pytest.approx(2.0)
