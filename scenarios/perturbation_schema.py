@@ -16,7 +16,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from .base import FiniteFloat, NonNegativeFloat, Strict
+from .base import FiniteFloat, NonNegativeFloat, PositiveFloat, Strict
 
 Fraction = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
 LaneOffset = Annotated[int, Field(ge=-3, le=3)]
@@ -115,7 +115,7 @@ class Noise(_Window, _Cameras):
     """[-] multiplier of every noise standard deviation."""
 
 
-class _ScriptedVehicle(_Window):
+class _PlacedVehicle(_Window):
     lane_offset: LaneOffset = 1
     """[lanes] the vehicle's lane relative to the ego's (+1: next lane to the left, −1: to the right)."""
     offset_m: FiniteFloat = 0.0
@@ -123,11 +123,20 @@ class _ScriptedVehicle(_Window):
     relative_speed_mps: FiniteFloat = 0.0
     """[m/s] its target speed minus the ego's target speed."""
 
+
+class _ScriptedVehicle(_PlacedVehicle):
     @model_validator(mode="after")
     def _check_lane(self):
         if self.lane_offset == 0:
             raise ValueError("lane_offset: must name another lane than the ego's (±1, ±2, ...)")
         return self
+
+
+class _VehicleAhead(_PlacedVehicle):
+    lane_offset: LaneOffset = 0
+    """[lanes] the vehicle's lane relative to the ego's (0: the ego's own lane; +1: next lane to the left)."""
+    offset_m: PositiveFloat = 30.0
+    """[m] how far ahead of the ego, along the road, it appears (centre to centre)."""
 
 
 class Occluder(_ScriptedVehicle):
@@ -146,9 +155,33 @@ class CutIn(_ScriptedVehicle):
     actor_class: Literal["car", "truck", "bus", "motorcycle"] = "car"
 
 
+class LeadBrake(_VehicleAhead):
+    """A vehicle appears at the window's first frame ``offset_m`` ahead of the ego in its lane (or ``lane_offset``
+    lanes from it), drives there at the ego's target speed + ``relative_speed_mps`` without changing lanes, and at
+    the window's last frame brakes to a stop at ``deceleration_mps2``; it stays stopped for the rest of the run."""
+
+    kind: Literal["lead_brake"]
+    actor_class: Literal["car", "truck", "bus", "motorcycle"] = "car"
+    deceleration_mps2: Annotated[float, Field(gt=0, le=10, allow_inf_nan=False)] = 6.0
+    """[m/s²] its braking (6 m/s²: the hardest the simulated vehicles brake otherwise; ~10 m/s² is an emergency
+    stop on dry asphalt)."""
+
+
+class Stalled(_VehicleAhead):
+    """A vehicle standing still from the window's first frame to its last, ``offset_m`` ahead of the ego in its lane
+    (or ``lane_offset`` lanes from it): a breakdown the traffic, and the ego, must go around or stop behind."""
+
+    kind: Literal["stalled"]
+    actor_class: Literal["car", "truck", "bus", "motorcycle"] = "car"
+    offset_m: PositiveFloat = 150.0
+    """[m] how far ahead of the ego, along the road, it stands (centre to centre)."""
+    relative_speed_mps: Literal[0.0] = 0.0
+    """[m/s] not settable: a stalled vehicle does not move."""
+
+
 Perturbation = Annotated[
-    Occlude | MissBurst | Blackout | DropFrames | Calibration | Noise | Occluder | CutIn,
+    Occlude | MissBurst | Blackout | DropFrames | Calibration | Noise | Occluder | CutIn | LeadBrake | Stalled,
     Field(discriminator="kind"),
 ]
-WORLD_KINDS = ("occluder", "cut_in")
+WORLD_KINDS = ("occluder", "cut_in", "lead_brake", "stalled")
 """Perturbations that act on the traffic rather than on the sensor."""

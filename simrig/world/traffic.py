@@ -32,12 +32,14 @@ What this module adds to highway-env (the README's "What simrig does with highwa
 
 from __future__ import annotations
 
+import types
+
 import gymnasium as gym
 import highway_env  # noqa: F401  (registers the environments)
 import numpy as np
 from highway_env.road.lane import LineType, StraightLane
 
-from simrig.scenarios.perturbation_schema import CutIn, Occluder
+from simrig.scenarios.perturbation_schema import CutIn, LeadBrake, Occluder, Stalled
 from simrig.scenarios.schema import TrafficConfig
 
 from ..road import RoadMarkings
@@ -59,6 +61,8 @@ SPAWN_MIN_SPEED_FRACTION = 0.05
 SPAWN_SPEED_BISECTIONS = 6
 """[-] bisection steps for the speed a new vehicle's gap allows (to ~1.5% of its drawn speed)."""
 EGO_CLASS = ActorClass.CAR
+Scripted = Occluder | CutIn | LeadBrake | Stalled
+"""The world perturbations: vehicles simrig places and steers (``WORLD_KINDS``)."""
 
 _ENV_CONFIG = {
     "highway-v0": lambda cfg: {
@@ -96,7 +100,7 @@ class TrafficWorld:
         *,
         env_seed: int,
         rng: np.random.Generator,
-        scripted: tuple[tuple[int, Occluder | CutIn], ...] = (),
+        scripted: tuple[tuple[int, Scripted], ...] = (),
         ego_on_perception: bool = False,
     ):
         self.config = config
@@ -335,14 +339,22 @@ class TrafficWorld:
             if isinstance(script, CutIn) and self._frame == last:
                 vehicle.target_lane_index = (*vehicle.lane_index[:2], self.ego.lane_index[2])
                 events.append(f"{name} changes into the ego's lane id={vehicle.simrig_id}")
-            if isinstance(script, Occluder) and self._frame == last + 1:
+            if isinstance(script, LeadBrake) and self._frame == last:
+                vehicle.target_speed = 0.0  # IDM's free term then brakes at its limit, set to the script's
+                vehicle.ACC_MAX = script.deceleration_mps2
+                events.append(f"{name} brakes at {script.deceleration_mps2:g} m/s² id={vehicle.simrig_id}")
+            if (isinstance(script, LeadBrake) and self._frame >= last
+                    and vehicle.speed <= script.deceleration_mps2 / self.frame_rate_hz):
+                _hold_still(vehicle)  # the next step would overshoot zero: stopped
+            if isinstance(script, (Occluder, Stalled)) and self._frame == last + 1:
                 road.vehicles.remove(vehicle)
                 events.append(f"{name} removed id={vehicle.simrig_id}")
         return events
 
-    def _spawn_scripted(self, script: Occluder | CutIn, name: str) -> tuple[SimrigVehicle, str]:
+    def _spawn_scripted(self, script: Scripted, name: str) -> tuple[SimrigVehicle, str]:
         """Place a scripted vehicle ``lane_offset`` lanes beside the ego (mirrored to the other side if the
-        road has no lane there) and ``offset_m`` along the road; vehicles in its way are removed."""
+        road has no lane there) and ``offset_m`` along the road; vehicles in its way are removed. A stalled one
+        stands still (:func:`_hold_still`)."""
         road = self.env.unwrapped.road
         start, end, ego_lane = self.ego.lane_index
         lanes = road.network.graph[start][end]
@@ -366,11 +378,13 @@ class TrafficWorld:
         hits = _blocking(along, same_lane, np.array([vehicle_type.LENGTH]), snapshot.half_sizes)[0]
         in_way = [v for v, hit in zip(others, hits, strict=True) if hit]
         road.vehicles = [v for v in road.vehicles if v not in in_way]
-        speed = self.ego.target_speed + script.relative_speed_mps
+        speed = 0.0 if isinstance(script, Stalled) else self.ego.target_speed + script.relative_speed_mps
         vehicle = vehicle_type(
             road, position, heading=heading, speed=speed, target_lane_index=(start, end, lane_id), target_speed=speed
         )
         vehicle.enable_lane_change = False
+        if isinstance(script, Stalled):
+            _hold_still(vehicle)
         vehicle.simrig_id = self._next_id
         self._next_id += 1
         road.vehicles.append(vehicle)
@@ -436,6 +450,18 @@ class TrafficWorld:
             boxes=boxes,
             events=events,
         )
+
+
+def _hold_still(vehicle: SimrigVehicle) -> None:
+    """Stop ``vehicle`` for good: speed 0, and from now on it commands no acceleration and no steering (IDM with a
+    target speed of 0 would otherwise rock about zero at its braking limit)."""
+    vehicle.speed = 0.0
+    vehicle.target_speed = 0.0
+    vehicle.act = types.MethodType(_stand, vehicle)
+
+
+def _stand(self, action=None) -> None:
+    self.action = {"steering": 0.0, "acceleration": 0.0}
 
 
 class _RoadSnapshot:
