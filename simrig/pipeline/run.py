@@ -167,7 +167,8 @@ def run_pipeline(
         "generation_s": generation_s, "dataset_reused": reused, "frames": tracking.frames,
         "step_s": tracking.step_seconds, "step_frames_per_second": tracking.frames_per_second})
     index = write_index(out)
-    return PipelineResult(report, tracking, (folder, tracking.out, json_path, errors_path, markdown, index),
+    planned = (plan_path,) if report.plan is not None else ()
+    return PipelineResult(report, tracking, (folder, tracking.out, json_path, errors_path, *planned, markdown, index),
                           loaded, folder, reused, label)
 
 
