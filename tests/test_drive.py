@@ -127,3 +127,69 @@ def test_outcome_by_hand():
     assert outcome.min_ttc_s == pytest.approx(min(25.4 / 10.0, gap1 / 9.5))
     assert outcome.hard_brakes == (0,) and outcome.near_misses == () and outcome.collisions == 0
     assert outcome.progress_m == pytest.approx(2.0)
+
+
+CLOSED_SUITE = """
+name = "closed_small"
+scenarios = ["cut_in"]
+seeds = [4]
+frames = 60
+closed_loop = true
+
+[[trackers]]
+tracker = "global_hungarian"
+"""
+
+
+def test_a_closed_loop_bench_row_is_the_drive_scored(tmp_path):
+    """A suite with ``closed_loop = true``: the row is the tracker's drive scored on the world it drove, with the
+    drive's outcome against the ground-truth drive."""
+    from simrig.benchmark import run_bench
+    from simrig.pipeline.drive import drive
+    from simrig.scoring import score
+
+    suite = tmp_path / "closed.toml"
+    suite.write_text(CLOSED_SUITE)
+    local = run_bench(suite, out=tmp_path / "local", workers=1)
+    row = pq_rows(local.results)[0]
+    scenario = load_scenario("cut_in")
+    reference = drive(scenario, seed=4, out=tmp_path / "ref", frames=FRAMES)
+    mine = drive(scenario, seed=4, out=tmp_path / "mine", frames=FRAMES, tracker="global_hungarian")
+    direct = score(Dataset.open(mine.dataset), mine.tracks).metrics3d["overall"]
+    assert row["3d_AMOTA"] == direct["AMOTA"] and row["3d_PKL"] == direct["PKL"]
+    assert row["drive_progress_m"] == mine.outcome.progress_m
+    assert row["drive_progress_lost_m"] == reference.outcome.progress_m - mine.outcome.progress_m
+    assert row["drive_hard_brakes"] == len(mine.outcome.hard_brakes)
+
+
+@pytest.mark.slow
+def test_a_closed_loop_bench_writes_the_same_bytes_on_the_local_pool_and_ray(tmp_path):
+    from simrig.benchmark import run_bench
+
+    pytest.importorskip("ray")
+    suite = tmp_path / "closed.toml"
+    suite.write_text(CLOSED_SUITE)
+    local = run_bench(suite, out=tmp_path / "local", workers=2)
+    ray_run = run_bench(suite, out=tmp_path / "ray", engine="ray", workers=2)
+    for name in ("results.parquet", "causes.parquet"):
+        assert (local.out / name).read_bytes() == (ray_run.out / name).read_bytes(), name
+
+
+def test_a_closed_loop_suite_refuses_what_cannot_drive(tmp_path):
+    from simrig.benchmark.suite import SuiteError
+    from simrig.benchmark import run_bench
+
+    suite = tmp_path / "closed.toml"
+    suite.write_text(CLOSED_SUITE.replace('tracker = "global_hungarian"', 'tracker = "sort"\ncamera = "CAM_FRONT"'))
+    with pytest.raises(SuiteError, match=r"trackers.0.camera: a closed-loop suite drives on 3D tracks"):
+        run_bench(suite, out=tmp_path / "a")
+    suite.write_text(CLOSED_SUITE.replace('"cut_in"', '"sweep_surround6"'))
+    with pytest.raises(SuiteError, match=r"closed_loop = true: sweep_surround6: \[sensor.capture\] is set"):
+        run_bench(suite, out=tmp_path / "b")
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def pq_rows(path) -> list[dict]:
+    import pyarrow.parquet as pq
+
+    return pq.read_table(path).to_pylist()

@@ -12,6 +12,7 @@ from tqdm import tqdm
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import check_output_path, check_own_folder, folder_lock
 from ..pipeline.cache import check_cache_folder
+from ..pipeline.drive import DriveError, check_drivable
 from .engine_names import ENGINES
 from .engines import Interrupted, local_engine, machine_workers, ray_engine
 from .plan import FRAME_SECONDS, Plan, make_plan
@@ -58,6 +59,12 @@ def run_bench(
     if workers is not None and workers < 1:
         raise SuiteError(f"--workers {workers}: must be at least 1")
     loaded, scenarios = load_suite(suite, trust_file=trust_file)
+    if loaded.closed_loop:
+        for scenario in scenarios.values():
+            try:
+                check_drivable(scenario)
+            except DriveError as error:
+                raise SuiteError(f"{suite}: closed_loop = true: {error}") from None
     plan = make_plan(loaded, scenarios)
     out = Path(out) if out is not None else Path("runs") / "bench" / loaded.name
     cache = Path(cache) if cache is not None else out / "datasets"

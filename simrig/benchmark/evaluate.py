@@ -11,6 +11,7 @@ import time
 from dataclasses import dataclass, field
 
 from simrig.pipeline.cache import cached_dataset
+from simrig.pipeline.drive import DRIVE_COLUMNS, closed_loop_score, reference_outcome
 from simrig.pipeline.guard import TrackerFault, TrackerTimeout
 from simrig.pipeline.track import run_tracker
 from simrig.scoring.planner import PLANNER_METRICS
@@ -22,9 +23,12 @@ from ..scoring import ScoreReport, score
 from ..scoring.attribution import errors_by_cause
 from .plan import Job
 
-METRIC_COLUMNS = (*(f"3d_{name}" for name in (*METRICS_3D, *PLANNER_METRICS)), *(f"2d_{name}" for name in METRICS_2D))
+METRIC_COLUMNS = (*(f"3d_{name}" for name in (*METRICS_3D, *PLANNER_METRICS)), *(f"2d_{name}" for name in METRICS_2D),
+                  *DRIVE_COLUMNS)
 """Metric columns of the results table: ``3d_`` overall 3D metrics (nuScenes style, null for a tracker scored on
-one camera), ``2d_`` overall 2D metrics (TrackEval style; of that one camera when the tracker names one)."""
+one camera, with the planner-aware scores), ``2d_`` overall 2D metrics (TrackEval style; of that one camera when the
+tracker names one), and ``drive_`` the closed-loop outcomes (:data:`~simrig.pipeline.drive.DRIVE_COLUMNS`; null
+unless the suite drives closed loop)."""
 
 
 class BenchError(SimrigError):
@@ -63,17 +67,28 @@ def evaluate(job: Job) -> tuple[list[Outcome], float]:
     started = time.perf_counter()
     where = f"cell {job.cell} ({job.scenario.name}, seed {job.seed}, {job.frames} frames)"
     try:
-        dataset = cached_dataset(job.scenario, job.seed, job.frames, job.cache)
+        if job.closed_loop:  # each tracker drives its own world; the ground-truth drive is the reference
+            reference = reference_outcome(job.scenario, job.seed, job.frames)
+        else:
+            dataset = cached_dataset(job.scenario, job.seed, job.frames, job.cache)
     except SimrigError as error:
         raise BenchError(f"{where}: {error}") from None
     dataset_s = time.perf_counter() - started
     outcomes = []
     for key, entry in job.trackers:
         try:
-            run = run_tracker(dataset, entry.tracker, None, dict(entry.params), seed=job.seed,  # tracks in memory
-                              frame_time_limit_s=job.frame_time_limit_s)
-            scoring_started = time.perf_counter()
-            report = score(dataset, run.tracks, camera=entry.camera)
+            drive_values: dict[str, float] = {}
+            if job.closed_loop:
+                driven = closed_loop_score(job.scenario, job.seed, entry.tracker, dict(entry.params), job.frames,
+                                           reference, job.frame_time_limit_s)
+                report, drive_values, step_s = driven.report, driven.outcomes, driven.step_seconds
+                scoring_started = time.perf_counter()
+            else:
+                run = run_tracker(dataset, entry.tracker, None, dict(entry.params), seed=job.seed,  # in memory
+                                  frame_time_limit_s=job.frame_time_limit_s)
+                step_s = run.step_seconds
+                scoring_started = time.perf_counter()
+                report = score(dataset, run.tracks, camera=entry.camera)
         except TrackerTimeout as error:  # the tracker's recorded failure on this cell; the bench goes on
             outcomes.append(Outcome(job.cell, key, dict.fromkeys(METRIC_COLUMNS, math.nan), (), math.nan, 0.0,
                                     failure=f"timeout: {error}"))
@@ -84,18 +99,20 @@ def evaluate(job: Job) -> tuple[list[Outcome], float]:
             raise BenchError(f"{where}, tracker {entry.name}: {error}") from None
         except Exception as error:  # a user's tracker failing: keep its traceback as the cause
             raise BenchError(f"{where}, tracker {entry.name}: {type(error).__name__}: {error}") from error
-        outcomes.append(Outcome(job.cell, key, metric_values(report), _cause_counts(report),
-                                run.step_seconds, time.perf_counter() - scoring_started,
+        outcomes.append(Outcome(job.cell, key, metric_values(report, drive_values), _cause_counts(report),
+                                step_s, time.perf_counter() - scoring_started,
                                 _scored_as(report, entry.camera), _camera_values(report)))
     return outcomes, dataset_s
 
 
-def metric_values(report: ScoreReport) -> dict[str, float]:
-    """The overall metrics of ``report`` under :data:`METRIC_COLUMNS` names; NaN where absent."""
+def metric_values(report: ScoreReport, drive: dict[str, float] | None = None) -> dict[str, float]:
+    """The overall metrics of ``report`` (and the closed-loop outcomes ``drive``) under :data:`METRIC_COLUMNS`
+    names; NaN where absent."""
     overall3d = report.metrics3d["overall"] if report.metrics3d is not None else {}
     overall2d = report.metrics2d["overall"]
     values = {f"3d_{name}": overall3d.get(name) for name in (*METRICS_3D, *PLANNER_METRICS)}
     values |= {f"2d_{name}": overall2d.get(name) for name in METRICS_2D}
+    values |= {name: (drive or {}).get(name) for name in DRIVE_COLUMNS}
     return {name: math.nan if value is None else float(value) for name, value in values.items()}
 
 

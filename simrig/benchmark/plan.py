@@ -60,6 +60,8 @@ class Job:
     registered: tuple[tuple[str, str], ...] = ()
     """(name, ``module:qualname``) of trackers registered with ``simrig.register`` in the driver's process, which
     a worker registers again before it runs them (:func:`simrig.trackers.registry.register_again`)."""
+    closed_loop: bool = False
+    """Each tracker drives the cell closed loop (the suite's ``closed_loop``)."""
 
 
 def tracker_key(entry: TrackerEntry) -> str:
@@ -100,7 +102,8 @@ class Plan:
             world = world_key(scenario, seed, frames)
             if pending:
                 (later if world in worlds else first).append(Job(key, scenario, seed, frames, cache, pending,
-                                                                    self.suite.frame_time_limit_s, registered))
+                                                                    self.suite.frame_time_limit_s, registered,
+                                                                    self.suite.closed_loop))
             worlds.add(world)
         return first + later
 

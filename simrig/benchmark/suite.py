@@ -122,6 +122,9 @@ class Suite(Strict):
     frame_time_limit_s: Annotated[float, Field(ge=0, le=86_400, allow_inf_nan=False)] = 60.0
     """[s] a tracker call (one ``step()``) that runs longer is stopped and that tracker's rows of the cell record
     the timeout (``failure``) instead of metrics; 0: no limit."""
+    closed_loop: bool = False
+    """Each tracker drives every cell closed loop (``simrig drive``): its scores are those of its tracks on the world
+    it drove, and the results gain the drive outcome columns (``drive_*``) against the cell's ground-truth drive."""
     base: bool = True
     """Also run each scenario with its own settings (besides the sweeps)."""
     trackers: Annotated[tuple[TrackerEntry, ...], Field(min_length=1)]
@@ -139,6 +142,11 @@ class Suite(Strict):
             foreign = sorted(set(sweep.scenarios) - set(self.scenarios))
             if foreign:
                 raise ValueError(f"sweeps.{index}.scenarios: {foreign[0]!r} is not one of the suite's scenarios")
+        if self.closed_loop:
+            for index, entry in enumerate(self.trackers):
+                if entry.camera is not None:
+                    raise ValueError(f"trackers.{index}.camera: a closed-loop suite drives on 3D tracks over every "
+                                     "camera; a tracker scored on one camera cannot drive")
         if not self.base and not self.sweeps:
             raise ValueError("base: with base = false the suite needs at least one sweep")
         return self

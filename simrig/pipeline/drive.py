@@ -20,6 +20,7 @@ tracker's frames would need the delivery schedule) and a 2D-only tracker (the pl
 from __future__ import annotations
 
 import json
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -270,3 +271,48 @@ def drive_report(out: Path) -> str:
 def _frames(frames: list[int]) -> str:
     return "–" if not frames else f"{len(frames)}: " + ", ".join(str(f) for f in frames[:8]) + (
         ", …" if len(frames) > 8 else "")
+
+
+DRIVE_COLUMNS = ("drive_collision", "drive_near_misses", "drive_min_ttc_s", "drive_hard_brakes", "drive_progress_m",
+                 "drive_progress_lost_m")
+"""The closed-loop outcome columns of a bench or search with ``closed_loop = true``: a collision (1/0), near misses,
+the least time to collision [s] (inf: nothing ever closed in), hard brakes, the progress [m], and the progress the
+ground-truth drive of the same scenario and seed made beyond it [m]."""
+
+
+@dataclass(frozen=True)
+class ClosedLoopScore:
+    """A tracker's drive scored: the score report of its tracks on its own drive's dataset (open loop on the world
+    it drove), and the drive outcomes (:data:`DRIVE_COLUMNS`)."""
+
+    report: object
+    outcomes: dict[str, float]
+    step_seconds: float
+
+
+def closed_loop_score(scenario: Scenario, seed: int, tracker, params: dict | None, frames: int | None,
+                      reference: DriveOutcome, frame_time_limit_s: float | None = FRAME_TIME_LIMIT_S
+                      ) -> ClosedLoopScore:
+    """Drive ``scenario`` on ``tracker`` in a temporary folder (removed after: a drive is made again exactly from
+    its scenario, seed and tracker), score it, and compare its outcome with ``reference`` (the ground-truth drive's:
+    :func:`reference_outcome`)."""
+    from simrig.scoring import score
+
+    with tempfile.TemporaryDirectory(prefix="simrig-drive-") as work:
+        result = drive(scenario, seed=seed, out=Path(work), tracker=tracker, params=params, frames=frames,
+                       frame_time_limit_s=frame_time_limit_s)
+        dataset = Dataset.open(result.dataset)
+        report = score(dataset, result.tracks)
+    outcome = result.outcome
+    values = {
+        "drive_collision": float(outcome.collisions > 0), "drive_near_misses": float(len(outcome.near_misses)),
+        "drive_min_ttc_s": outcome.min_ttc_s, "drive_hard_brakes": float(len(outcome.hard_brakes)),
+        "drive_progress_m": outcome.progress_m, "drive_progress_lost_m": reference.progress_m - outcome.progress_m,
+    }
+    return ClosedLoopScore(report, values, result.step_seconds)
+
+
+def reference_outcome(scenario: Scenario, seed: int, frames: int | None) -> DriveOutcome:
+    """The outcome of the ground-truth drive of ``scenario`` and ``seed`` (made in a temporary folder)."""
+    with tempfile.TemporaryDirectory(prefix="simrig-drive-") as work:
+        return drive(scenario, seed=seed, out=Path(work), frames=frames).outcome

@@ -16,6 +16,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from simrig.benchmark.evaluate import METRIC_COLUMNS
+from simrig.pipeline.drive import DRIVE_COLUMNS
 from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
 from simrig.reading import read_capped
@@ -169,6 +170,10 @@ def _check_objective(config: SearchSpaceConfig, where: str) -> None:
     if config.objective.failure is not None and config.objective.failure.metric is not None:
         named.append(("objective.failure.metric", config.objective.failure.metric))
     for key, metric in named:
+        if metric in DRIVE_COLUMNS:
+            raise SearchError(f"{where}: {key}: {metric!r} is a closed-loop outcome, and a search scores open loop; "
+                              "use an open-loop planner-aware score (3d_PKL, 3d_HZ_MISS, ...) or a bench with "
+                              "closed_loop = true")
         if metric not in METRIC_COLUMNS:
             raise SearchError(f"{where}: {key}: {metric!r} is not a metric the scorer reports; known: "
-                              f"{', '.join(METRIC_COLUMNS)}")
+                              f"{', '.join(m for m in METRIC_COLUMNS if m not in DRIVE_COLUMNS)}")
