@@ -87,7 +87,8 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     metrics3d = metrics2d = plan = None
     if tracks.tracks3d is not None and camera is None and dataset.has_3d:
         metrics3d, errors3d = _score_3d(truth, tracks, lookback, interpolation)
-        errors3d, plan = _planner(metrics3d, errors3d, planner_road_of(dataset), truth, tracks.tracks3d)
+        errors3d, plan = _planner(metrics3d, errors3d, planner_road_of(dataset), truth, tracks.tracks3d,
+                                   dataset.identity["ground_truth_sha256"])
         errors.append(errors3d)
     if dataset.has_2d:
         if has_2d_tracks:
@@ -136,7 +137,7 @@ def _score_3d(truth: GroundTruth, tracks: TrackSet, lookback: int, interpolation
 
 
 def _planner(metrics3d: dict, errors3d: pa.Table, road: PlanningRoad | None, truth: GroundTruth,
-             tracks3d) -> tuple[pa.Table, pa.Table | None]:
+             tracks3d, key: str) -> tuple[pa.Table, pa.Table | None]:
     """Adds the planner-aware scores (:mod:`simrig.scoring.planner`) to ``metrics3d["overall"]`` (NaN, with a note
     under ``metrics3d["planner"]``, for a dataset simrig did not simulate) and each 3D miss's consequence to the
     errors; returns the errors and the per-frame plan table (None when not scored)."""
@@ -149,7 +150,7 @@ def _planner(metrics3d: dict, errors3d: pa.Table, road: PlanningRoad | None, tru
     frames = errors3d.column("frame").to_numpy()
     actors = errors3d.column("actor_id").to_numpy()
     misses = np.flatnonzero(kinds == "FN")
-    scores = planner_scores(road, truth, tracks3d, np.column_stack([frames[misses], actors[misses]]))
+    scores = planner_scores(road, truth, tracks3d, np.column_stack([frames[misses], actors[misses]]), key)
     weight = errors3d.column("consequence").to_numpy(zero_copy_only=False).copy()
     weight[misses] = [scores.consequence.get((int(frames[i]), int(actors[i])), 0.0) for i in misses]
     metrics3d["overall"].update(scores.metrics)

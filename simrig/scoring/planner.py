@@ -38,7 +38,7 @@ the box it leaves behind, which the frame's divergence already counts.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pyarrow as pa
@@ -102,6 +102,31 @@ class PlannerScores:
     consequence: dict[tuple[int, int], float]
 
 
+@dataclass
+class _TruthPlans:
+    """The plans on one ground truth, by frame position (the planning ego and its plan), and the weights of its
+    misses by (frame, actor id)."""
+
+    key: str | None
+    plans: dict[int, tuple] = field(default_factory=dict)
+    weights: dict[tuple[int, int], float] = field(default_factory=dict)
+
+
+_remembered = _TruthPlans(None)
+
+
+def _truth_plans(key: str | None) -> _TruthPlans:
+    """The remembered plans of ground truth ``key`` (fresh ones, remembered from now on, for another key; never
+    kept without a key)."""
+    global _remembered
+    if key is None or _remembered.key != key:
+        fresh = _TruthPlans(key)
+        if key is not None:
+            _remembered = fresh
+        return fresh
+    return _remembered
+
+
 class PlanningRoad:
     """The road of a simrig-generated dataset, empty, and the ego's planner on it: the scenario's traffic settings
     and seed give highway-env's road and the ego's initial route, without simulating any traffic."""
@@ -130,9 +155,14 @@ def planner_road_of(dataset: Dataset) -> PlanningRoad | None:
                         dataset.seed)
 
 
-def planner_scores(road: PlanningRoad, truth: GroundTruth, tracks3d: TrackRows, misses: np.ndarray) -> PlannerScores:
+def planner_scores(road: PlanningRoad, truth: GroundTruth, tracks3d: TrackRows, misses: np.ndarray,
+                   key: str | None = None) -> PlannerScores:
     """Open-loop planner-aware scores of ``tracks3d`` (world frame, relative to the true ego) against ``truth``;
-    ``misses`` ``(n, 2)``: the (frame, actor id) of every 3D FN, to be weighed (module docstring)."""
+    ``misses`` ``(n, 2)``: the (frame, actor id) of every 3D FN, to be weighed (module docstring).
+
+    ``key`` names the ground truth (its SHA-256): the plans on it, and the weights of its misses, are kept for the
+    next call with the same key (the other trackers on the same dataset: a bench cell, ``simrig explain``'s
+    counterfactuals of one world), so each frame then costs one query, on the tracks."""
     gt_rows = np.flatnonzero(in_class_range(truth, truth.frame, truth.label, truth.boxes))
     track_rows = np.flatnonzero(in_class_range(truth, tracks3d.frame, tracks3d.label, tracks3d.boxes))
     gt_bounds = np.searchsorted(truth.frame[gt_rows], np.stack([truth.frames, truth.frames + 1]))
@@ -145,21 +175,26 @@ def planner_scores(road: PlanningRoad, truth: GroundTruth, tracks3d: TrackRows, 
     lane_truth, lane_tracks = np.zeros(f, np.int8), np.zeros(f, np.int8)
     leader_truth, leader_tracks = np.full(f, -1, np.int64), np.full(f, -1, np.int64)
     consequence: dict[tuple[int, int], float] = {}
+    remembered = _truth_plans(key)
     for position, frame in enumerate(truth.frames.tolist()):
-        ego = road.ego(truth.egos[position])
         g = gt_rows[gt_bounds[0, position]:gt_bounds[1, position]]
         t = track_rows[track_bounds[0, position]:track_bounds[1, position]]
-        on_truth = road.plan(ego, truth.boxes[g], truth.actor_id[g])
+        if position not in remembered.plans:
+            ego = road.ego(truth.egos[position])
+            remembered.plans[position] = (ego, road.plan(ego, truth.boxes[g], truth.actor_id[g]))
+        ego, on_truth = remembered.plans[position]
         on_tracks = road.plan(ego, tracks3d.boxes[t], tracks3d.track_id[t])
         a_truth[position], a_tracks[position], free[position] = (on_truth.acceleration, on_tracks.acceleration,
                                                                  on_truth.free_acceleration)
         lane_truth[position], lane_tracks[position] = on_truth.lane_change, on_tracks.lane_change
         leader_truth[position], leader_tracks[position] = on_truth.leader, on_tracks.leader
         for actor in sorted(missed_at.get(frame, set()) & on_truth.read):
-            keep = g[truth.actor_id[g] != actor]
-            without = road.plan(ego, truth.boxes[keep], truth.actor_id[keep])
-            consequence[(frame, actor)] = float(divergence(on_truth.acceleration, on_truth.lane_change,
-                                                           without.acceleration, without.lane_change))
+            if (frame, actor) not in remembered.weights:
+                keep = g[truth.actor_id[g] != actor]
+                without = road.plan(ego, truth.boxes[keep], truth.actor_id[keep])
+                remembered.weights[(frame, actor)] = float(divergence(
+                    on_truth.acceleration, on_truth.lane_change, without.acceleration, without.lane_change))
+            consequence[(frame, actor)] = remembered.weights[(frame, actor)]
     kl = divergence(a_truth, lane_truth, a_tracks, lane_tracks)
     missed = (free - a_truth >= HAZARD_MPS2) & (a_tracks - a_truth >= HAZARD_MPS2)
     invented = a_truth - a_tracks >= HAZARD_MPS2
