@@ -206,3 +206,19 @@ def test_a_2d_tracker_is_not_planner_scored_and_the_report_says_so(small_dataset
     report = score(small_dataset, sort_tracks)
     assert report.metrics3d is None and report.plan is None
     assert "Planner-aware: not scored (2D tracks" in report.table()
+
+
+def test_every_road_of_the_catalog_is_planned(tmp_path):
+    """The planner scores datasets of the other maps too (a roundabout's ego follows a route through its
+    segments): perfect tracks plan exactly as the ground truth there."""
+    from simrig.pipeline.generate import generate
+    from simrig.scenarios.overrides import with_setting
+
+    scenario = with_setting(load_scenario("roundabout_surround6"), "render.visibility", False)
+    generate(scenario, seed=100, out=tmp_path / "round", frames=40)
+    dataset = Dataset.open(tmp_path / "round")
+    truth = load_ground_truth(dataset)
+    write_tracks(tmp_path / "perfect", _tracks(truth))
+    report = score(dataset, tmp_path / "perfect")
+    assert report.metrics3d["planner"] == {"scored": True} and report.metrics3d["overall"]["PKL"] == 0.0
+    assert len(report.plan) == 40

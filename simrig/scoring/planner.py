@@ -46,7 +46,7 @@ import pyarrow as pa
 from simrig.dataset import Dataset
 from simrig.dataset.ground_truth import GroundTruth
 from simrig.dataset.tracks_file import TrackRows
-from simrig.scenarios.schema import TrafficConfig
+from simrig.scenarios.schema import TrafficConfig, scenario_from_record
 from simrig.seeding import RandomStreams
 from simrig.world import TrafficWorld
 from simrig.world.ego_planner import EgoPlan, plan, planning_ego
@@ -150,9 +150,8 @@ def planner_road_of(dataset: Dataset) -> PlanningRoad | None:
     """The planning road of ``dataset``; None for a dataset simrig did not simulate (an imported one)."""
     if dataset.source is not None:
         return None
-    scenario = dataset.scenario
-    return PlanningRoad(TrafficConfig.model_validate(scenario["traffic"]), float(scenario["frame_rate_hz"]),
-                        dataset.seed)
+    scenario = scenario_from_record(dataset.scenario)
+    return PlanningRoad(scenario.traffic, scenario.frame_rate_hz, dataset.seed)
 
 
 def planner_scores(road: PlanningRoad, truth: GroundTruth, tracks3d: TrackRows, misses: np.ndarray,
