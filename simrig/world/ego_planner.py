@@ -88,14 +88,23 @@ def planning_ego(road: Road, ego_type: type[IDMVehicle], pose: EgoPose, target_s
 
 
 def route_from(route: list | None, lane_index: tuple) -> list | None:
-    """The part of ``route`` from the segment of ``lane_index`` on (the whole route when that segment is not on it;
-    highway-env then picks the next segment itself)."""
+    """The part of ``route`` from the segment of ``lane_index`` on; when that segment is not on it (where lanes
+    overlap, as at a roundabout's entries, the closest lane can be a neighbour of the ego's), from the first step
+    that starts where the segment ends; None when neither is on it (highway-env then picks the next segment).
+
+    >>> route = [("a", "b", 0), ("b", "c", None), ("c", "d", None)]
+    >>> route_from(route, ("b", "c", 1)), route_from(route, ("x", "c", 0)), route_from(route, ("x", "y", 0))
+    ([('b', 'c', None), ('c', 'd', None)], [('c', 'd', None)], None)
+    """
     if not route:
         return None
     for position, step in enumerate(route):
         if tuple(step[:2]) == tuple(lane_index[:2]):
             return list(route[position:])
-    return list(route)
+    for position, step in enumerate(route):
+        if step[0] == lane_index[1]:
+            return list(route[position:])
+    return None
 
 
 def drive_on_perception(ego: IDMVehicle) -> None:
