@@ -15,7 +15,7 @@ from .cause_costs import cause_costs_section
 from .curves import curve_table, plot_sweep, plot_sweep_by_scenario
 from .groups import groups
 from .load import BenchResults, load_bench
-from .summary import camera_table, causes_table, paired_table, scenario_table, tracker_table
+from .summary import camera_table, causes_table, paired_table, ranking_note, scenario_table, tracker_table
 from .worst_cell import inspect_worst
 
 DEFAULT_REPORT_DIR = "report"
@@ -79,6 +79,7 @@ def _results_section(bench: BenchResults) -> list[str]:
                       "difference (tracker − reference; IDS and IDSW per sequence) with its 95 % BCa bootstrap "
                       "interval over sequences; `n.s.`: the interval contains 0, so the suite cannot tell the two "
                       "apart.", ""] + paired + [""]
+        lines += ranking_note(bench, group)
         lines += ["Per scenario: HOTA, mean over seeds (identity switches, summed over seeds).", ""]
         lines += scenario_table(bench, group) + [""]
         per_camera = camera_table(bench, group)
@@ -126,6 +127,13 @@ def _causes_section(bench: BenchResults) -> list[str]:
 
 
 def _worst_section(bench: BenchResults, out: Path) -> list[str]:
+    if bench.description["suite_settings"].get("closed_loop"):
+        row = bench.results.sort_values("drive_progress_lost_m", ascending=False).iloc[0]
+        return ["## The worst cell", "",
+                "A closed-loop bench's cells are drives, each tracker in its own world: the drive that lost most "
+                f"progress against the ground-truth drive is `{row['tracker']}` on {row['scenario']}, seed "
+                f"{row['seed']} ({row['drive_progress_lost_m']:.1f} m). See it with `simrig drive "
+                f"{row['scenario']} --seed {row['seed']} --tracker {row['tracker']}`.", ""]
     worst = inspect_worst(bench, out)
     row = worst.row
     entry = bench.trackers[0]

@@ -57,6 +57,30 @@ def paired_table(bench: BenchResults, group: Group) -> list[str]:
     return table(["tracker", "sequences"] + [f"Δ {name}" for _, name in group.curve_metrics], out)
 
 
+def ranking_note(bench: BenchResults, group: Group) -> list[str]:
+    """For 3D trackers with planner-aware scores: the trackers ordered by HOTA, by AMOTA and by PKL (lower is
+    better), and a note where PKL's order disagrees with a classic one (Spearman's ρ of the means below 1)."""
+    rows = _base_rows(bench)
+    rows = rows[rows["scored"] == group.key]
+    if "3d_PKL" not in rows.columns or rows["3d_PKL"].isna().all() or rows["tracker"].nunique() < 2:
+        return []
+    means = rows.groupby("tracker", sort=False)[["2d_HOTA", "3d_AMOTA", "3d_PKL"]].mean()
+    orders = {"HOTA": means["2d_HOTA"].sort_values(ascending=False).index,
+              "AMOTA": means["3d_AMOTA"].sort_values(ascending=False).index,
+              "PKL": means["3d_PKL"].sort_values().index}
+    lines = ["Ranked by the means above (best first):", ""]
+    lines += [f"- {name}: " + " > ".join(f"`{t}`" for t in order) for name, order in orders.items()]
+    disagree = []
+    for name, column in (("HOTA", "2d_HOTA"), ("AMOTA", "3d_AMOTA")):
+        rho = means[column].rank().corr(-means["3d_PKL"].rank())  # Spearman's ρ: Pearson's on the ranks
+        if rho < 1 - 1e-9:
+            disagree.append(f"{name} (Spearman's ρ {rho:+.2f})")
+    lines += ["", (f"The planner-aware order disagrees with {' and '.join(disagree)}: the errors these trackers make "
+                   "differ in what they would change for the ego (docs/planner.md)." if disagree else
+                   "The planner-aware order agrees with HOTA's and AMOTA's."), ""]
+    return lines
+
+
 def scenario_table(bench: BenchResults, group: Group) -> list[str]:
     """Rows: scenarios; columns: trackers of ``group``; cells: HOTA (mean over seeds) and identity switches
     (summed over seeds)."""
