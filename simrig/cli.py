@@ -617,11 +617,20 @@ def _register_bench(commands) -> None:
     bench.set_defaults(run=_cmd_bench)
 
 
+CLOSED_LOOP_EXPLAIN = ("--explain: the suite drives closed loop (closed_loop = true), and explain reruns the sensor "
+                       "on a fixed world; a drive's world changes with every cause removed")
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from .benchmark import run_bench
     from .benchmark.api import BenchInterrupted
 
     _check_explain_options(args)
+    if args.explain:
+        from .benchmark.suite import load_suite
+
+        if load_suite(args.suite, trust_file=args.trust_file)[0].closed_loop:
+            raise SimrigError(CLOSED_LOOP_EXPLAIN)
     try:
         result = run_bench(args.suite, engine=args.engine, workers=args.workers, out=args.out, cache=args.cache,
                            address=args.address, progress=not args.quiet, trust_file=args.trust_file)

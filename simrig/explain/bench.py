@@ -69,6 +69,9 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
         raise ExplainError(f"{out}: not a finished bench folder ({error})") from None
     if not description.get("complete") or not (out / RESULTS).is_file():
         raise ExplainError(f"{out}: the bench did not finish; run '{description.get('command')}' again first")
+    if description["suite_settings"].get("closed_loop"):
+        raise ExplainError(f"{out}: the bench drove closed loop (closed_loop = true); explain reruns the sensor on a "
+                           "fixed world, and a drive's world changes with every cause removed")
     entries = {TrackerEntry.model_validate(entry).name: entry for entry in description["suite_settings"]["trackers"]}
     limit = description["suite_settings"].get("frame_time_limit_s", FRAME_TIME_LIMIT_S)
     results = pq.read_table(out / RESULTS)

@@ -212,8 +212,9 @@ def drive_folder(scenario: Scenario, *, seed: int, tracker, out: Path | str, par
         tracked = drive(scenario, seed=seed, out=folder, tracker=tracker, params=params, frames=frames,
                         overwrite=True, progress=progress, frame_time_limit_s=frame_time_limit_s)
     except BaseException:
-        if folder.is_dir() and not any(folder.iterdir()):
-            folder.rmdir()
+        for left in (folder, folder.parent, out):  # nothing of a drive that could not run stays behind
+            if left.is_dir() and not any(left.iterdir()):
+                left.rmdir()
         raise
     reference = (_read_drive(reference_dir, GROUND_TRUTH) if reused
                  else drive(scenario, seed=seed, out=reference_dir, frames=frames, overwrite=True, progress=progress))

@@ -15,7 +15,15 @@ from .cause_costs import cause_costs_section
 from .curves import curve_table, plot_sweep, plot_sweep_by_scenario
 from .groups import groups
 from .load import BenchResults, load_bench
-from .summary import camera_table, causes_table, paired_table, ranking_note, scenario_table, tracker_table
+from .summary import (
+    camera_table,
+    causes_table,
+    drive_table,
+    paired_table,
+    ranking_note,
+    scenario_table,
+    tracker_table,
+)
 from .worst_cell import inspect_worst
 
 DEFAULT_REPORT_DIR = "report"
@@ -80,6 +88,9 @@ def _results_section(bench: BenchResults) -> list[str]:
                       "interval over sequences; `n.s.`: the interval contains 0, so the suite cannot tell the two "
                       "apart.", ""] + paired + [""]
         lines += ranking_note(bench, group)
+        if bench.description["suite_settings"].get("closed_loop"):
+            lines += ["Closed loop: each tracker drove every cell; the outcomes against the cell's ground-truth "
+                      "drive (docs/planner.md).", ""] + drive_table(bench, group) + [""]
         lines += ["Per scenario: HOTA, mean over seeds (identity switches, summed over seeds).", ""]
         lines += scenario_table(bench, group) + [""]
         per_camera = camera_table(bench, group)
@@ -133,7 +144,7 @@ def _worst_section(bench: BenchResults, out: Path) -> list[str]:
                 "A closed-loop bench's cells are drives, each tracker in its own world: the drive that lost most "
                 f"progress against the ground-truth drive is `{row['tracker']}` on {row['scenario']}, seed "
                 f"{row['seed']} ({row['drive_progress_lost_m']:.1f} m). See it with `simrig drive "
-                f"{row['scenario']} --seed {row['seed']} --tracker {row['tracker']}`.", ""]
+                f"{row['scenario']} --seed {row['seed']} --tracker {row['tracker']} --frames {row['frames']}`.", ""]
     worst = inspect_worst(bench, out)
     row = worst.row
     entry = bench.trackers[0]

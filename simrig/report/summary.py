@@ -57,6 +57,20 @@ def paired_table(bench: BenchResults, group: Group) -> list[str]:
     return table(["tracker", "sequences"] + [f"Δ {name}" for _, name in group.curve_metrics], out)
 
 
+def drive_table(bench: BenchResults, group: Group) -> list[str]:
+    """Rows: trackers of ``group``; cells: drives with a collision, drives with a near miss, the median least time
+    to collision [s], hard brakes per drive, and the progress lost to the ground-truth drive [m] per drive."""
+    rows = _base_rows(bench)
+    rows = rows[rows["scored"] == group.key]
+    out = []
+    for tracker, frame in rows.groupby("tracker", sort=False):
+        out.append([f"`{tracker}`", str(len(frame)), f"{int((frame['drive_collision'] > 0).sum())}",
+                    f"{int((frame['drive_near_misses'] > 0).sum())}", number(frame["drive_min_ttc_s"].median()),
+                    number(frame["drive_hard_brakes"].mean()), number(frame["drive_progress_lost_m"].mean())])
+    return table(["tracker", "drives", "with a collision", "with a near miss", "median least TTC [s]",
+                  "hard brakes per drive", "progress lost [m]"], out)
+
+
 def ranking_note(bench: BenchResults, group: Group) -> list[str]:
     """For 3D trackers with planner-aware scores: the trackers ordered by HOTA, by AMOTA and by PKL (lower is
     better), and a note where PKL's order disagrees with a classic one (Spearman's ρ of the means below 1)."""

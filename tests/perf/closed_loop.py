@@ -38,9 +38,27 @@ def _drive(job: tuple[str, int, str | None, Path]) -> dict:
     from simrig.scenarios import load_scenario
 
     scenario, seed, tracker, folder = job
-    result = drive(load_scenario(scenario), seed=seed, out=folder, tracker=tracker)
+    loaded = load_scenario(scenario)
+    done = _finished(folder, loaded, seed)
+    outcome = done if done is not None else drive(loaded, seed=seed, out=folder, tracker=tracker).outcome
     return {"scenario": scenario, "seed": seed, "tracker": tracker or GROUND_TRUTH, "folder": str(folder),
-            **result.outcome.to_dict()}
+            **outcome.to_dict()}
+
+
+def _finished(folder: Path, scenario, seed: int):
+    """The outcome of the drive already in ``folder`` when it is complete and of this scenario and seed (a rerun
+    of the report after one scenario changed drives only that one again); None otherwise."""
+    from simrig.dataset import Dataset
+    from simrig.errors import DatasetError
+    from simrig.scoring.drive_outcome import drive_outcome
+
+    try:
+        dataset = Dataset.open(folder / "dataset")
+    except DatasetError:
+        return None
+    if dataset.manifest["scenario"] != scenario.model_dump(mode="json") or dataset.seed != seed:
+        return None
+    return drive_outcome(dataset.ground_truth)
 
 
 def _table(rows: list[dict]) -> list[str]:
