@@ -40,7 +40,7 @@ def _drive(job: tuple[str, int, str | None, Path]) -> dict:
     scenario, seed, tracker, folder = job
     loaded = load_scenario(scenario)
     done = _finished(folder, loaded, seed)
-    outcome = done if done is not None else drive(loaded, seed=seed, out=folder, tracker=tracker).outcome
+    outcome = done if done is not None else drive(loaded, seed=seed, out=folder, tracker=tracker, overwrite=True).outcome
     return {"scenario": scenario, "seed": seed, "tracker": tracker or GROUND_TRUTH, "folder": str(folder),
             **outcome.to_dict()}
 
