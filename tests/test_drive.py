@@ -9,13 +9,13 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from simrig.scenarios import load_scenario
+from simrig.scenarios.overrides import with_setting
 
 from simrig.classes import CLASS_SPECS
 from simrig.dataset import Dataset
 from simrig.pipeline.drive import DriveError, drive
 from simrig.pipeline.guard import TrackerFault
-from simrig.scenarios import load_scenario
-from simrig.scenarios.overrides import with_setting
 from simrig.scoring.drive_outcome import drive_outcome
 from simrig.types import ActorClass, Box3D, EgoPose, Track
 
@@ -104,7 +104,8 @@ class _NanVelocity(_Replay):
 
 def test_a_tracker_with_nan_velocity_gets_one_line_naming_the_frame_and_field(scenario, reference, tmp_path):
     with pytest.raises(TrackerFault, match=r"frame 0: .*box3d has a non-finite value"):
-        drive(scenario, seed=4, out=tmp_path / "nan", frames=FRAMES, tracker=_NanVelocity(Dataset.open(reference.dataset)))
+        drive(scenario, seed=4, out=tmp_path / "nan", frames=FRAMES,
+              tracker=_NanVelocity(Dataset.open(reference.dataset)))
 
 
 def test_outcome_by_hand():
@@ -176,8 +177,8 @@ def test_a_closed_loop_bench_writes_the_same_bytes_on_the_local_pool_and_ray(tmp
 
 
 def test_a_closed_loop_suite_refuses_what_cannot_drive(tmp_path):
-    from simrig.benchmark.suite import SuiteError
     from simrig.benchmark import run_bench
+    from simrig.benchmark.suite import SuiteError
 
     suite = tmp_path / "closed.toml"
     suite.write_text(CLOSED_SUITE.replace('tracker = "global_hungarian"', 'tracker = "sort"\ncamera = "CAM_FRONT"'))

@@ -10,13 +10,13 @@ import math
 
 import numpy as np
 import pytest
+from simrig.scenarios import load_scenario
+from simrig.scenarios.schema import TrafficConfig
 
 from simrig.classes import CLASS_SPECS
 from simrig.dataset import Dataset
 from simrig.dataset.ground_truth import load_ground_truth
 from simrig.dataset.tracks_file import write_tracks
-from simrig.scenarios import load_scenario
-from simrig.scenarios.schema import TrafficConfig
 from simrig.scoring import score
 from simrig.scoring.planner import LANE_SLIP, PlanningRoad, divergence
 from simrig.seeding import RandomStreams
@@ -211,8 +211,9 @@ def test_a_2d_tracker_is_not_planner_scored_and_the_report_says_so(small_dataset
 def test_every_road_of_the_catalog_is_planned(tmp_path):
     """The planner scores datasets of the other maps too (a roundabout's ego follows a route through its
     segments): perfect tracks plan exactly as the ground truth there."""
-    from simrig.pipeline.generate import generate
     from simrig.scenarios.overrides import with_setting
+
+    from simrig.pipeline.generate import generate
 
     scenario = with_setting(load_scenario("roundabout_surround6"), "render.visibility", False)
     generate(scenario, seed=100, out=tmp_path / "round", frames=40)

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from simrig.pipeline.generate import generate
 from simrig.scenarios import ScenarioError, load_scenario
 from simrig.scenarios.overrides import with_setting
+
+from simrig.pipeline.generate import generate
 
 
 def _track_of(dataset, prefix: str) -> tuple[int, np.ndarray, np.ndarray]:

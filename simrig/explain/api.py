@@ -39,15 +39,15 @@ from simrig.scenarios.schema import scenario_from_record
 from simrig.scoring.attribution import KINDS
 from simrig.scoring.planner import PLANNER_METRICS
 from simrig.scoring.results import METRICS_2D, METRICS_3D
-
-EXPLAINABLE_3D = (*METRICS_3D, *PLANNER_METRICS)
-"""The 3D metrics a run can be explained on: the nuScenes family and the planner-aware scores."""
 from simrig.sensor.groups import all_groups, present_groups
 
 from ..benchmark.engines import local_map, machine_workers, ray_map
 from .coalition import CoalitionResult, CoalitionTask, TrackerRun, evaluate_coalition
 from .shapley import Coalition, all_coalitions, coalition_order, exact_shares, prefixes, sample_orders, sampled_shares
 from .waterfall import waterfall
+
+EXPLAINABLE_3D = (*METRICS_3D, *PLANNER_METRICS)
+"""The 3D metrics a run can be explained on: the nuScenes family and the planner-aware scores."""
 
 CACHE_DIR = "cache"
 EXACT_LIMIT = 7

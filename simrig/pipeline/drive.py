@@ -32,7 +32,7 @@ from simrig.dataset.manifest import write_json_atomic
 from simrig.dataset.outputs import check_own_folder, write_text_atomic
 from simrig.dataset.reader import frame_detections
 from simrig.dataset.run_folder import REPORT
-from simrig.dataset.tracks_file import TrackTables, tracks_in_memory, write_tracks
+from simrig.dataset.tracks_file import TrackTables, write_tracks
 from simrig.dataset.writer import arrow_table
 from simrig.errors import DatasetError, SimrigError
 from simrig.pipeline.content_keys import drive_key

@@ -12,7 +12,6 @@ from pathlib import Path
 from typing import Protocol
 
 import numpy as np
-
 from tqdm import tqdm
 
 from simrig.dataset import Dataset, DatasetWriter, check_output_folder

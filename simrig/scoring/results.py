@@ -30,7 +30,8 @@ IGNORED_COLUMNS = ("boxes", "ignored", "range", "height", "visibility", "truncat
 """Per camera: ground-truth boxes in view, how many are ignored, and by each rule (a box may break several;
 ``source``: a distractor and ``unevaluated``: not evaluated, as an imported dataset's source marks it);
 ``delivered``: the scored (not ignored) boxes the camera's detector reported."""
-COUNT_METRICS = {"LANE", "HZ_MISS", "HZ_FAKE", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN", "IDSW", "Frag", "PT", "CLR_TP", "CLR_FN", "CLR_FP"}
+COUNT_METRICS = {"LANE", "HZ_MISS", "HZ_FAKE", "IDS", "FRAG", "MT", "ML", "TP", "FP", "FN", "IDSW", "Frag", "PT",
+                 "CLR_TP", "CLR_FN", "CLR_FP"}
 
 
 @dataclass

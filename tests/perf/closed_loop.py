@@ -34,13 +34,16 @@ GROUND_TRUTH = "ground truth"
 
 
 def _drive(job: tuple[str, int, str | None, Path]) -> dict:
-    from simrig.pipeline.drive import drive
     from simrig.scenarios import load_scenario
+
+    from simrig.pipeline.drive import drive
 
     scenario, seed, tracker, folder = job
     loaded = load_scenario(scenario)
     done = _finished(folder, loaded, seed)
-    outcome = done if done is not None else drive(loaded, seed=seed, out=folder, tracker=tracker, overwrite=True).outcome
+    if done is None:
+        done = drive(loaded, seed=seed, out=folder, tracker=tracker, overwrite=True).outcome
+    outcome = done
     return {"scenario": scenario, "seed": seed, "tracker": tracker or GROUND_TRUTH, "folder": str(folder),
             **outcome.to_dict()}
 

@@ -25,12 +25,12 @@ from pathlib import Path
 import numpy as np
 from highway_env.road.road import Road
 from published import command_line, machine, publish
+from simrig.scenarios import load_scenario
 
 from simrig.dataset import Dataset
 from simrig.pipeline.drive import drive
 from simrig.pipeline.generate import generate
 from simrig.pipeline.track import run_tracker
-from simrig.scenarios import load_scenario
 from simrig.scoring import api as scoring_api
 from simrig.scoring import score
 from simrig.scoring.planner import planner_road_of, planner_scores
@@ -94,7 +94,8 @@ def open_loop(work: Path) -> list[str]:
 def closed_loop(work: Path) -> list[str]:
     scenario = load_scenario("cut_in")
     lines = ["## Closed loop: `simrig drive` against generate + track", "",
-             "| scene | tracker | generate + track [s] | drive [s] | drive / (generate + track) |", "|---|---|---|---|---|"]
+             "| scene | tracker | generate + track [s] | drive [s] | drive / (generate + track) |",
+             "|---|---|---|---|---|"]
     separate, together = [], []
     for repeat in range(REPEATS):
         folder = work / f"separate{repeat}"

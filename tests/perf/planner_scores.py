@@ -72,8 +72,8 @@ def rank_agreement(results: pd.DataFrame) -> tuple[list[str], pd.DataFrame]:
         rows.append(row)
     per_sequence = pd.DataFrame(rows)
     means = results.groupby("tracker")[[*CLASSIC, "3d_PKL"]].mean()
-    lines += ["| classic metric | mean ρ over sequences [95% interval] | sequences with ρ < 0 | ρ of the pooled means |",
-              "|---|---|---|---|"]
+    lines += ["| classic metric | mean ρ over sequences [95% interval] | sequences with ρ < 0 "
+              "| ρ of the pooled means |", "|---|---|---|---|"]
     for column in CLASSIC:
         values = per_sequence[column].dropna().to_numpy()
         interval = bootstrap((values,), np.mean, n_resamples=10_000, random_state=0, method="BCa").confidence_interval
