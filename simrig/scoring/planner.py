@@ -22,11 +22,11 @@ vehicle each reacts to, and the divergence between the two plans. Over the run (
   Δa = 2.6 m/s²). Unlike the paper's, this divergence is over one step's action, not 4 s of future positions.
 * ``dACC`` [m/s²]: mean |a_tracks − a_truth|.
 * ``LANE``: frames whose lane decisions differ.
-* ``HZ_MISS``: frames with a **missed hazard** — the ground-truth plan brakes for its leader (it commands at least
-  :data:`HAZARD_MPS2` less than IDM's free-road acceleration) and the track-fed plan commands at least
-  :data:`HAZARD_MPS2` more than it.
-* ``HZ_FAKE``: frames with an **invented hazard** — the track-fed plan commands at least :data:`HAZARD_MPS2` less
-  than the ground-truth plan (it brakes for a vehicle that is not there, or nearer or slower than it is).
+* ``HZ_MISS``: frames with a **missed hazard** — the ground-truth plan brakes (commands −:data:`HAZARD_MPS2` or
+  less) and the track-fed plan commands at least :data:`HAZARD_MPS2` more (it brakes much less, or not at all).
+* ``HZ_FAKE``: frames with an **invented hazard** — the track-fed plan brakes (−:data:`HAZARD_MPS2` or less) and
+  the ground-truth plan commands at least :data:`HAZARD_MPS2` more (the tracks show a vehicle that is not there, or
+  nearer or slower than it is).
 
 **Consequence of each error.** A missed vehicle (a 3D FN at a frame) weighs the divergence between the plan on the
 ground truth and the plan on the ground truth without that vehicle: what missing it alone would change. A vehicle
@@ -60,9 +60,12 @@ ACTION_NOISE_MPS2 = 1.0
 """[m/s²] σ of the executed acceleration around the planner's command (the action noise model of ``PKL``)."""
 LANE_SLIP = 0.05
 """[-] probability that the lane action is not the decided one (shared by the two others; the ``PKL`` model)."""
-HAZARD_MPS2 = 1.0
-"""[m/s²] how much harder (or softer) the track-fed plan must brake than the ground-truth plan to count a hazard
-invented (or missed): a third of IDM's comfortable acceleration (3 m/s²), an easily felt change of command."""
+HAZARD_MPS2 = 2.0
+"""[m/s²] a hazard is braking at least this hard on one side that the other side's command is at least this much
+above: the braking MOBIL refuses to impose on another driver (``LANE_CHANGE_MAX_BRAKING_IMPOSED``), the
+deceleration highway-env's own planner treats as significant. (Counting any 1 m/s² shortfall below IDM's free-road
+command flagged most frames of ordinary close following, where IDM is most sensitive to a metre or a metre per
+second of tracking error.)"""
 PLANNER_METRICS = ("PKL", "dACC", "LANE", "HZ_MISS", "HZ_FAKE")
 """The run's planner-aware scores (module docstring)."""
 PLAN_SCHEMA = pa.schema([
@@ -170,7 +173,7 @@ def planner_scores(road: PlanningRoad, truth: GroundTruth, tracks3d: TrackRows, 
     for frame, actor in np.asarray(misses, dtype=np.int64).reshape(-1, 2).tolist():
         missed_at.setdefault(frame, set()).add(actor)
     f = len(truth.frames)
-    a_truth, a_tracks, free = np.zeros(f), np.zeros(f), np.zeros(f)
+    a_truth, a_tracks = np.zeros(f), np.zeros(f)
     lane_truth, lane_tracks = np.zeros(f, np.int8), np.zeros(f, np.int8)
     leader_truth, leader_tracks = np.full(f, -1, np.int64), np.full(f, -1, np.int64)
     consequence: dict[tuple[int, int], float] = {}
@@ -183,8 +186,7 @@ def planner_scores(road: PlanningRoad, truth: GroundTruth, tracks3d: TrackRows, 
             remembered.plans[position] = (ego, road.plan(ego, truth.boxes[g], truth.actor_id[g]))
         ego, on_truth = remembered.plans[position]
         on_tracks = road.plan(ego, tracks3d.boxes[t], tracks3d.track_id[t])
-        a_truth[position], a_tracks[position], free[position] = (on_truth.acceleration, on_tracks.acceleration,
-                                                                 on_truth.free_acceleration)
+        a_truth[position], a_tracks[position] = on_truth.acceleration, on_tracks.acceleration
         lane_truth[position], lane_tracks[position] = on_truth.lane_change, on_tracks.lane_change
         leader_truth[position], leader_tracks[position] = on_truth.leader, on_tracks.leader
         for actor in sorted(missed_at.get(frame, set()) & on_truth.read):
@@ -195,8 +197,8 @@ def planner_scores(road: PlanningRoad, truth: GroundTruth, tracks3d: TrackRows, 
                     on_truth.acceleration, on_truth.lane_change, without.acceleration, without.lane_change))
             consequence[(frame, actor)] = remembered.weights[(frame, actor)]
     kl = divergence(a_truth, lane_truth, a_tracks, lane_tracks)
-    missed = (free - a_truth >= HAZARD_MPS2) & (a_tracks - a_truth >= HAZARD_MPS2)
-    invented = a_truth - a_tracks >= HAZARD_MPS2
+    missed = (a_truth <= -HAZARD_MPS2) & (a_tracks - a_truth >= HAZARD_MPS2)
+    invented = (a_tracks <= -HAZARD_MPS2) & (a_truth - a_tracks >= HAZARD_MPS2)
     hazard = np.where(missed, "missed", np.where(invented, "invented", ""))
     frames = pa.table({
         "frame": truth.frames.astype(np.int32), "acceleration_truth": a_truth, "acceleration_tracks": a_tracks,

@@ -34,13 +34,11 @@ from .phantoms import PhantomRoad
 class EgoPlan:
     """What the ego's planner commands for the next step.
 
-    acceleration [m/s²]; free_acceleration [m/s²]: what IDM would command with nothing ahead (the difference is
-    how hard the planner reacts to its leader); lane_change: −1 left, 0 keep, +1 right; leader: the ident of the
+    acceleration [m/s²]; lane_change: −1 left, 0 keep, +1 right; leader: the ident of the
     vehicle ahead in the ego's lane (−1: free road); read: the idents of every vehicle a neighbour search returned —
     the vehicles the plan depends on (removing any other leaves the plan unchanged)."""
 
     acceleration: float
-    free_acceleration: float
     lane_change: int
     leader: int
     read: frozenset[int]
@@ -61,12 +59,10 @@ def plan(ego: IDMVehicle, phantoms: list, real_road: Road) -> EgoPlan:
     probe.road = road
     lane = probe.lane_index
     leader, _ = road.neighbour_vehicles(probe, lane)
-    free = float(probe.acceleration(probe, None))
     IDMVehicle.act(probe)
     target = probe.target_lane_index
     return EgoPlan(
         acceleration=float(probe.action["acceleration"]),
-        free_acceleration=free,
         lane_change=int(target[2] - lane[2]) if target[:2] == lane[:2] else 0,
         leader=-1 if leader is None else int(getattr(leader, "ident", -1)),
         read=frozenset(int(getattr(v, "ident", -1)) for v in road.read if v is not probe),
