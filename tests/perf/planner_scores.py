@@ -107,7 +107,7 @@ def disagreements(results: pd.DataFrame, per_sequence: pd.DataFrame, scratch: Pa
                   f"{group.at[worse, '3d_PKL']:.3f}); its plan diverges most at frame {frame}: "
                   f"{at.acceleration_tracks:+.2f} m/s² on its tracks against {at.acceleration_truth:+.2f} on the "
                   f"ground truth (lane decision {int(at.lane_change_tracks):+d} against {int(at.lane_change_truth):+d}"
-                  f"{', a ' + at.hazard + ' hazard' if at.hazard else ''}).", "",
+                  f"{', an ' + at.hazard + ' hazard' if at.hazard else ''}).", "",
                   f"![{row.scenario} seed {row.seed}, {better}, frame {frame}]({picture.name})", "",
                   f"*`simrig run {row.scenario} --seed {row.seed} --tracker {better}` then `simrig render DATASET "
                   f"--frame {frame} --tracks TRACKS`.*", ""]
