@@ -63,6 +63,7 @@ def test_perfect_tracks_drive_exactly_as_the_ground_truth(scenario, reference, t
     assert Dataset.open(reference.dataset).manifest["drive"] == {"perception": "ground truth"}
 
 
+@pytest.mark.slow
 def test_a_tracker_drives_another_world_and_the_same_one_twice_in_another_process(scenario, reference, tmp_path):
     """A reference tracker changes the ego's drive (its world differs from the ground-truth drive's), and the
     same drive in a fresh process writes the same bytes, manifest included."""
