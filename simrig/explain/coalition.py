@@ -25,6 +25,7 @@ from simrig.pipeline.track import run_tracker
 from simrig.scenarios.schema import scenario_from_record
 from simrig.scoring import score
 from simrig.scoring.attribution import KINDS
+from simrig.scoring.planner import PLANNER_METRICS
 
 ErrorKey = tuple[str, str, int, int, str]
 """(dimension, kind, ground-truth actor id, frame, camera — empty in 3D): how an error is matched across runs."""
@@ -124,7 +125,8 @@ def evaluate_coalition(task: CoalitionTask) -> tuple[CoalitionResult, ...]:
         except TrackerFault as error:  # the tracker's own failure on this coalition: its caller decides
             results.append(CoalitionResult(task.removed, np.full(len(run.metrics), np.nan), None, str(error)))
             continue
-        report = score(dataset, tracking.tracks, camera=run.camera)
+        report = score(dataset, tracking.tracks, camera=run.camera,
+                       planner=any(name in PLANNER_METRICS for _, name in run.metrics))
         values = np.array([_metric_value(report, dimension, name) for dimension, name in run.metrics])
         results.append(CoalitionResult(task.removed, values, _error_keys(report.errors) if run.errors else None))
     return tuple(results)

@@ -39,7 +39,7 @@ UNITS_2D = (HOTA(), _CLEAR, Identity())
 def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookback_s: float = LOOKBACK_S,
           camera: str | None = None, truth: GroundTruth | None = None,
           evaluation: EvaluationConfig | dict | None = None, fmt: str | None = None,
-          interpolation: str = "devkit") -> ScoreReport:
+          interpolation: str = "devkit", planner: bool = True) -> ScoreReport:
     """Score ``tracks`` (a tracks folder or file, or a read :class:`TrackSet`) against ``dataset``.
 
     ``fmt``: the tracks' format — ``simrig``, ``motchallenge``, ``kitti`` or ``nuscenes``
@@ -58,6 +58,10 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     gaps inside 3D tracks are filled before the AMOTA family — ``devkit`` (the default: the nuScenes devkit
     1.2.0 as shipped, so the numbers compare with published ones), ``corrected`` or ``none``
     (:mod:`simrig.formats.nuscenes.interpolation`).
+
+    ``planner``: also ask the ego's planner (:mod:`simrig.scoring.planner`; the planner-aware scores, each miss's
+    consequence and the per-frame plans). False leaves them NaN ("not asked"), for callers that need none of them
+    (``simrig explain`` on other metrics: dozens of counterfactual runs).
     """
     if interpolation not in INTERPOLATIONS:
         raise TracksError(f"--interpolation {interpolation!r}: choose one of {', '.join(INTERPOLATIONS)}")
@@ -87,8 +91,11 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     metrics3d = metrics2d = plan = None
     if tracks.tracks3d is not None and camera is None and dataset.has_3d:
         metrics3d, errors3d = _score_3d(truth, tracks, lookback, interpolation)
-        errors3d, plan = _planner(metrics3d, errors3d, planner_road_of(dataset), truth, tracks.tracks3d,
-                                   dataset.identity["ground_truth_sha256"])
+        if planner:
+            errors3d, plan = _planner(metrics3d, errors3d, planner_road_of(dataset), truth, tracks.tracks3d,
+                                       dataset.identity["ground_truth_sha256"])
+        else:
+            _not_planned(metrics3d, "not asked")
         errors.append(errors3d)
     if dataset.has_2d:
         if has_2d_tracks:
@@ -136,15 +143,20 @@ def _score_3d(truth: GroundTruth, tracks: TrackSet, lookback: int, interpolation
     return {"overall": overall, "per_class": per_class}, _concat(errors)
 
 
+def _not_planned(metrics3d: dict, note: str) -> None:
+    """The planner-aware scores left NaN, with why under ``metrics3d["planner"]``."""
+    metrics3d["overall"].update(dict.fromkeys(PLANNER_METRICS, float("nan")))
+    metrics3d["planner"] = {"scored": False, "note": note}
+
+
 def _planner(metrics3d: dict, errors3d: pa.Table, road: PlanningRoad | None, truth: GroundTruth,
              tracks3d, key: str) -> tuple[pa.Table, pa.Table | None]:
     """Adds the planner-aware scores (:mod:`simrig.scoring.planner`) to ``metrics3d["overall"]`` (NaN, with a note
     under ``metrics3d["planner"]``, for a dataset simrig did not simulate) and each 3D miss's consequence to the
     errors; returns the errors and the per-frame plan table (None when not scored)."""
     if road is None:
-        metrics3d["overall"].update(dict.fromkeys(PLANNER_METRICS, float("nan")))
-        metrics3d["planner"] = {"scored": False, "note": "not scored: the dataset was not simulated by simrig, so "
-                                "there is no ego planner to ask"}
+        _not_planned(metrics3d, "not scored: the dataset was not simulated by simrig, so there is no ego planner "
+                                "to ask")
         return errors3d, None
     kinds = errors3d.column("kind").to_numpy(zero_copy_only=False)
     frames = errors3d.column("frame").to_numpy()
