@@ -12,7 +12,6 @@ from tqdm import tqdm
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import check_output_path, check_own_folder, folder_lock
 from ..pipeline.cache import check_cache_folder
-from ..pipeline.drive import DriveError, check_drivable
 from .engine_names import ENGINES
 from .engines import Interrupted, local_engine, machine_workers, ray_engine
 from .plan import FRAME_SECONDS, Plan, make_plan
@@ -60,6 +59,8 @@ def run_bench(
         raise SuiteError(f"--workers {workers}: must be at least 1")
     loaded, scenarios = load_suite(suite, trust_file=trust_file)
     if loaded.closed_loop:
+        from ..pipeline.drive import DriveError, check_drivable
+
         for scenario in scenarios.values():
             try:
                 check_drivable(scenario)

@@ -11,9 +11,9 @@ import time
 from dataclasses import dataclass, field
 
 from simrig.pipeline.cache import cached_dataset
-from simrig.pipeline.drive import DRIVE_COLUMNS, closed_loop_score, reference_outcome
 from simrig.pipeline.guard import TrackerFault, TrackerTimeout
 from simrig.pipeline.track import run_tracker
+from simrig.scoring.drive_outcome import DRIVE_COLUMNS
 from simrig.scoring.planner import PLANNER_METRICS
 from simrig.scoring.results import METRICS_2D, METRICS_3D
 from simrig.trackers.registry import register_again
@@ -27,7 +27,7 @@ METRIC_COLUMNS = (*(f"3d_{name}" for name in (*METRICS_3D, *PLANNER_METRICS)), *
                   *DRIVE_COLUMNS)
 """Metric columns of the results table: ``3d_`` overall 3D metrics (nuScenes style, null for a tracker scored on
 one camera, with the planner-aware scores), ``2d_`` overall 2D metrics (TrackEval style; of that one camera when the
-tracker names one), and ``drive_`` the closed-loop outcomes (:data:`~simrig.pipeline.drive.DRIVE_COLUMNS`; null
+tracker names one), and ``drive_`` the closed-loop outcomes (:data:`~simrig.scoring.drive_outcome.DRIVE_COLUMNS`; null
 unless the suite drives closed loop)."""
 
 
@@ -68,6 +68,8 @@ def evaluate(job: Job) -> tuple[list[Outcome], float]:
     where = f"cell {job.cell} ({job.scenario.name}, seed {job.seed}, {job.frames} frames)"
     try:
         if job.closed_loop:  # each tracker drives its own world; the ground-truth drive is the reference
+            from simrig.pipeline.drive import closed_loop_score, reference_outcome
+
             reference = reference_outcome(job.scenario, job.seed, job.frames)
         else:
             dataset = cached_dataset(job.scenario, job.seed, job.frames, job.cache)

@@ -274,17 +274,10 @@ def _frames(frames: list[int]) -> str:
         ", …" if len(frames) > 8 else "")
 
 
-DRIVE_COLUMNS = ("drive_collision", "drive_near_misses", "drive_min_ttc_s", "drive_hard_brakes", "drive_progress_m",
-                 "drive_progress_lost_m")
-"""The closed-loop outcome columns of a bench or search with ``closed_loop = true``: a collision (1/0), near misses,
-the least time to collision [s] (inf: nothing ever closed in), hard brakes, the progress [m], and the progress the
-ground-truth drive of the same scenario and seed made beyond it [m]."""
-
-
 @dataclass(frozen=True)
 class ClosedLoopScore:
     """A tracker's drive scored: the score report of its tracks on its own drive's dataset (open loop on the world
-    it drove), and the drive outcomes (:data:`DRIVE_COLUMNS`)."""
+    it drove), and the drive outcomes (:data:`~simrig.scoring.drive_outcome.DRIVE_COLUMNS`)."""
 
     report: object
     outcomes: dict[str, float]

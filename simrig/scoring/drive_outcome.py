@@ -31,6 +31,12 @@ HARD_BRAKE_MPS2 = 4.0
 """[m/s²] a deceleration beyond this is hard braking (≈ 0.4 g; IDM's comfortable braking is 5 m/s², its limit
 6 m/s²)."""
 EGO_SPEC = CLASS_SPECS[ActorClass.CAR]
+DRIVE_COLUMNS = ("drive_collision", "drive_near_misses", "drive_min_ttc_s", "drive_hard_brakes", "drive_progress_m",
+                 "drive_progress_lost_m")
+"""The closed-loop outcome columns of a bench with ``closed_loop = true``: a collision (1/0), near misses,
+the least time to collision [s] (inf: nothing ever closed in), hard brakes, the progress [m], and the progress the
+ground-truth drive of the same scenario and seed made beyond it [m]."""
+
 
 
 @dataclass(frozen=True)

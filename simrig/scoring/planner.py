@@ -39,6 +39,7 @@ the box it leaves behind, which the frame's divergence already counts.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pyarrow as pa
@@ -48,13 +49,11 @@ from simrig.dataset.ground_truth import GroundTruth
 from simrig.dataset.tracks_file import TrackRows
 from simrig.scenarios.schema import TrafficConfig, scenario_from_record
 from simrig.seeding import RandomStreams
-from simrig.world import TrafficWorld
-from simrig.world.ego_planner import EgoPlan, plan, planning_ego
-from simrig.world.phantoms import phantoms_from_boxes
-from simrig.world.traffic import EGO_CLASS
-from simrig.world.vehicles import VEHICLE_TYPES
 
 from .inputs import in_class_range
+
+if TYPE_CHECKING:
+    from simrig.world.ego_planner import EgoPlan
 
 ACTION_NOISE_MPS2 = 1.0
 """[m/s²] σ of the executed acceleration around the planner's command (the action noise model of ``PKL``)."""
@@ -135,6 +134,16 @@ class PlanningRoad:
     and seed give highway-env's road and the ego's initial route, without simulating any traffic."""
 
     def __init__(self, traffic: TrafficConfig, frame_rate_hz: float, seed: int):
+        # highway-env is imported here, not with simrig.scoring: scoring a 2D tracker or an imported dataset never
+        # needs it, and importing it costs about 1.5 s
+        from simrig.world import TrafficWorld
+        from simrig.world.ego_planner import plan, planning_ego
+        from simrig.world.phantoms import phantoms_from_boxes
+        from simrig.world.traffic import EGO_CLASS
+        from simrig.world.vehicles import VEHICLE_TYPES
+
+        self._plan, self._planning_ego, self._phantoms = plan, planning_ego, phantoms_from_boxes
+        self._ego_type = VEHICLE_TYPES[EGO_CLASS]
         world = TrafficWorld(traffic, frame_rate_hz, env_seed=RandomStreams(seed).integer_seed("traffic"),
                              rng=np.random.default_rng(0))
         self.road, self.route = world.planning_road()
@@ -143,10 +152,11 @@ class PlanningRoad:
 
     def ego(self, pose):
         """The ego's planner at ``pose`` (:func:`~simrig.world.ego_planner.planning_ego`)."""
-        return planning_ego(self.road, VEHICLE_TYPES[EGO_CLASS], pose, self.target_speed, self.route)
+        return self._planning_ego(self.road, self._ego_type, pose, self.target_speed, self.route)
 
     def plan(self, ego, boxes: np.ndarray, idents: np.ndarray) -> EgoPlan:
-        return plan(ego, phantoms_from_boxes(self.road, boxes, idents), self.road)
+        """What ``ego``'s planner commands on world boxes ``(N, 9)`` with ``idents`` ``(N,)``."""
+        return self._plan(ego, self._phantoms(self.road, boxes, idents), self.road)
 
 
 def planner_road_of(dataset: Dataset) -> PlanningRoad | None:

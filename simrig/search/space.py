@@ -16,7 +16,6 @@ from typing import Any
 from pydantic import ValidationError
 
 from simrig.benchmark.evaluate import METRIC_COLUMNS
-from simrig.pipeline.drive import DRIVE_COLUMNS
 from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
 from simrig.reading import read_capped
@@ -24,6 +23,7 @@ from simrig.scenarios import Scenario, ScenarioError, describe_errors, load_scen
 from simrig.scenarios.files import catalog_entry_or_file
 from simrig.scenarios.overrides import get_setting, with_setting
 from simrig.scenarios.search_schema import Dimension, SearchSpaceConfig, space_catalog
+from simrig.scoring.drive_outcome import DRIVE_COLUMNS
 
 from ..errors import SimrigError
 
