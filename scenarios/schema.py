@@ -12,6 +12,7 @@ from pydantic import Field, model_validator
 
 from .base import FiniteFloat, NonNegativeFloat, PathName, PositiveFloat, Strict, set_keys
 from .evaluation_schema import EvaluationConfig
+from .layout_schema import Layout
 from .perturbation_schema import Perturbation
 from .sensor_schema import RenderConfig, SensorConfig
 from .timing_schema import latency_beyond
@@ -55,9 +56,19 @@ class TrafficConfig(Strict):
         default_factory=lambda: {"car": 0.8, "truck": 0.1, "bus": 0.05, "motorcycle": 0.05}
     )
     """[-] relative frequency of each class among spawned vehicles (normalised)."""
+    layout: Layout | None = None
+    """A long road simrig builds in place of the environment's own (:mod:`~simrig.scenarios.layout_schema`: oncoming
+    lanes, on-ramps, exits, crossings); only with ``env = "highway-v0"``, whose road it replaces."""
 
     @model_validator(mode="after")
     def _check(self) -> TrafficConfig:
+        if self.layout is not None:
+            if self.env != "highway-v0":
+                raise ValueError(f"layout: replaces highway-v0's road; env must be highway-v0, not {self.env}")
+            for key in ("lanes", "ego_lane"):
+                if key in set_keys(self) and (key == "lanes" or self.ego_lane is not None):
+                    raise ValueError(f"{key}: not with a layout ({self.layout.kind} sets its own lanes and "
+                                     "where the ego starts)")
         if "lanes" in set_keys(self) and self.env != "highway-v0":
             raise ValueError(f"lanes: only highway-v0 has a configurable lane count, not {self.env}")
         if self.ego_lane is not None and (self.env != "highway-v0" or self.ego_lane >= self.lanes):
@@ -231,12 +242,12 @@ def windows_outside(scenario: Scenario, frames: int) -> list[str]:
 def scenario_from_record(record: dict) -> Scenario:
     """The :class:`Scenario` of a resolved dump (``model_dump(mode="json")``, as a dataset manifest records
     it): the keys a setting refuses when written by hand are dropped — the rig keys its preset does not take,
-    and the lane count of a map other than highway-v0 (the dump holds every field; their values there are the
-    defaults, which the preset or map ignores) — everything else validated as usual."""
+    and the lane count of a map other than highway-v0 or of a layout (the dump holds every field; their values
+    there are the defaults, which the preset or map ignores) — everything else validated as usual."""
     rig = dict(record.get("rig", {}))
     allowed = _PRESET_KEYS.get(rig.get("preset", "surround6"), set()) | {"preset"}
     traffic = dict(record.get("traffic", {}))
-    if traffic.get("env", "highway-v0") != "highway-v0":
+    if traffic.get("env", "highway-v0") != "highway-v0" or traffic.get("layout") is not None:
         traffic.pop("lanes", None)
     return Scenario.model_validate({**record, "traffic": traffic,
                                     "rig": {key: value for key, value in rig.items() if key in allowed}})

@@ -106,8 +106,8 @@ class PlannerScores:
 
 @dataclass
 class _TruthPlans:
-    """The plans on one ground truth, by frame position (the planning ego and its plan), and the weights of its
-    misses by (frame, actor id)."""
+    """The plans on one ground truth, by frame position (the planning ego, its plan and the phantoms it planned on),
+    and the weights of its misses by (frame, actor id)."""
 
     key: str | None
     plans: dict[int, tuple] = field(default_factory=dict)
@@ -156,7 +156,16 @@ class PlanningRoad:
 
     def plan(self, ego, boxes: np.ndarray, idents: np.ndarray) -> EgoPlan:
         """What ``ego``'s planner commands on world boxes ``(N, 9)`` with ``idents`` ``(N,)``."""
-        return self._plan(ego, self._phantoms(self.road, boxes, idents), self.road)
+        return self.plan_on(ego, self.phantoms(boxes, idents))
+
+    def phantoms(self, boxes: np.ndarray, idents: np.ndarray) -> list:
+        """The :mod:`~simrig.world.phantoms` of world boxes ``(N, 9)`` with ``idents`` ``(N,)``: built once, they
+        keep the lanes they were found on for every later query on them."""
+        return self._phantoms(self.road, boxes, idents)
+
+    def plan_on(self, ego, phantoms: list) -> EgoPlan:
+        """What ``ego``'s planner commands on ``phantoms``."""
+        return self._plan(ego, phantoms, self.road)
 
 
 def planner_road_of(dataset: Dataset) -> PlanningRoad | None:
@@ -193,16 +202,16 @@ def planner_scores(road: PlanningRoad, truth: GroundTruth, tracks3d: TrackRows, 
         t = track_rows[track_bounds[0, position]:track_bounds[1, position]]
         if position not in remembered.plans:
             ego = road.ego(truth.egos[position])
-            remembered.plans[position] = (ego, road.plan(ego, truth.boxes[g], truth.actor_id[g]))
-        ego, on_truth = remembered.plans[position]
+            seen = road.phantoms(truth.boxes[g], truth.actor_id[g])
+            remembered.plans[position] = (ego, road.plan_on(ego, seen), seen)
+        ego, on_truth, seen = remembered.plans[position]
         on_tracks = road.plan(ego, tracks3d.boxes[t], tracks3d.track_id[t])
         a_truth[position], a_tracks[position] = on_truth.acceleration, on_tracks.acceleration
         lane_truth[position], lane_tracks[position] = on_truth.lane_change, on_tracks.lane_change
         leader_truth[position], leader_tracks[position] = on_truth.leader, on_tracks.leader
         for actor in sorted(missed_at.get(frame, set()) & on_truth.read):
             if (frame, actor) not in remembered.weights:
-                keep = g[truth.actor_id[g] != actor]
-                without = road.plan(ego, truth.boxes[keep], truth.actor_id[keep])
+                without = road.plan_on(ego, [phantom for phantom in seen if phantom.ident != actor])
                 remembered.weights[(frame, actor)] = float(divergence(
                     on_truth.acceleration, on_truth.lane_change, without.acceleration, without.lane_change))
             consequence[(frame, actor)] = remembered.weights[(frame, actor)]

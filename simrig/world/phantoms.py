@@ -55,11 +55,12 @@ class Phantom(ControlledVehicle):
     def lane_index(self):
         if self._lane_index is None:
             self._lane_index = self.road.network.get_closest_lane_index(self.position, self.heading)
+            self._lane = self.road.network.get_lane(self._lane_index)
         return self._lane_index
 
     @property
     def lane(self):
-        return self.road.network.get_lane(self.lane_index)
+        return self._lane if self._lane_index is not None else self.road.network.get_lane(self.lane_index)
 
     @property
     def target_lane_index(self):
@@ -86,8 +87,9 @@ class PhantomRoad(Road):
     phantoms). Neighbours are found by highway-env's own search (``Road.neighbour_vehicles``: a vehicle is in a lane
     when its centre is within half the lane width + 1 m of the centre line; the front vehicle is the nearest at or
     ahead of the ego, the rear the nearest behind); ``read`` collects every vehicle a search returned: the vehicles
-    the plan depended on. (A numpy search gave the same answers but was no faster at the ≤ 50 m of vehicles a plan
-    sees: ``reports/perf/planner.md``.)"""
+    the plan depended on. Within one query nothing moves, so each (vehicle, lane) search is done once and its answer
+    reused: MOBIL searches the ego's own lane again for every side lane, and IDM once more. (A numpy search gave the
+    same answers but was no faster at the ≤ 50 m of vehicles a plan sees: ``reports/perf/planner.md``.)"""
 
     def __init__(self, real: Road, vehicles: list):
         self.network = real.network
@@ -97,8 +99,12 @@ class PhantomRoad(Road):
         self.record_history = False
         self.neighbour_vehicles_connected_lanes = real.neighbour_vehicles_connected_lanes
         self.read: list = []
+        self._searched: dict = {}
 
     def neighbour_vehicles(self, vehicle, lane_index=None) -> tuple:
-        front, rear = Road.neighbour_vehicles(self, vehicle, lane_index)
-        self.read.extend(v for v in (front, rear) if v is not None)
-        return front, rear
+        key = (id(vehicle), lane_index or vehicle.lane_index)
+        found = self._searched.get(key)
+        if found is None:
+            found = self._searched[key] = Road.neighbour_vehicles(self, vehicle, lane_index)
+            self.read.extend(v for v in found if v is not None)
+        return found

@@ -45,6 +45,7 @@ from simrig.scenarios.schema import TrafficConfig
 from ..road import RoadMarkings
 from ..types import ActorClass, EgoPose, GroundTruthFrame
 from .ego_planner import drive_on_perception
+from .layouts import LIMIT_MARGIN_MPS, build_layout, lane_samples
 from .phantoms import phantoms_from_boxes
 from .vehicles import VEHICLE_TYPES, SimrigVehicle
 
@@ -125,37 +126,38 @@ class TrafficWorld:
         self._frame = -1
         self._terminated_reported = False
         self.ego: SimrigVehicle | None = None
+        self._layout = None
 
     # ------------------------------------------------------------------ life cycle
     def reset(self) -> GroundTruthFrame:
         """Start the scenario: a fresh road, the IDM ego placed inside the traffic, the window populated."""
-        self.env.reset(seed=self._env_seed)
+        road, lane_index, position, heading, route = self._start()
         env = self.env.unwrapped
-        road = env.road
-        old = env.vehicle
-        lane_index = old.lane_index
-        lane = road.network.get_lane(lane_index)
-        position, heading = old.position.copy(), old.heading
-        if self.config.env == "highway-v0":
-            s = self.config.window_radius_m + 10.0
-            position, heading = lane.position(s, 0.0), lane.heading_at(s)
         ego_type = VEHICLE_TYPES[EGO_CLASS]
         speed = self.config.ego_speed_mps
         self.ego = ego_type(
             road, position, heading=heading, speed=speed, target_lane_index=lane_index, target_speed=speed,
-            route=old.route,
+            route=route,
         )
         road.vehicles = [self.ego]
         env.controlled_vehicles = [self.ego]
         if self._ego_on_perception:
             drive_on_perception(self.ego)
-        self._lanes = road.network.lanes_list()
-        self._lane_indices = [
-            (start, end, index)
-            for start, ends in road.network.graph.items()
-            for end, lanes in ends.items()
-            for index in range(len(lanes))
-        ]
+        if self._layout is None:
+            self._lanes = road.network.lanes_list()
+            self._lane_indices = [
+                (start, end, index)
+                for start, ends in road.network.graph.items()
+                for end, lanes in ends.items()
+                for index in range(len(lanes))
+            ]
+        else:
+            self._lane_indices = sorted({lane for group in self._layout.groups for lane in group.lanes})
+            self._lanes = [road.network.get_lane(index) for index in self._lane_indices]
+            self._lane_points, self._lane_owner = lane_samples(road, tuple(self._lane_indices))
+            position_of = {lane: position for position, lane in enumerate(self._lane_indices)}
+            self._pairs = np.array([(position_of[lane], g) for g, group in enumerate(self._layout.groups)
+                                    for lane in group.lanes], dtype=np.int64).reshape(-1, 2)
         self._nodes = list(road.network.graph)
         self._next_id = 0
         self._frame = 0
@@ -165,6 +167,33 @@ class TrafficWorld:
         self._fill(self.config.initial_clearance_m)
         self._settle_initial_speeds()
         return self._state(tuple(events))
+
+    def _start(self) -> tuple:
+        """Reset highway-env and give the road, and the ego's start: lane index, position, heading [rad] and route
+        (highway-env frame). With a layout its road replaces the environment's (:mod:`~simrig.world.layouts`)."""
+        self.env.reset(seed=self._env_seed)
+        env = self.env.unwrapped
+        self._layout = None
+        if self.config.layout is None:
+            road, old = env.road, env.vehicle
+            lane_index = old.lane_index
+            lane = road.network.get_lane(lane_index)
+            position, heading = old.position.copy(), old.heading
+            if self.config.env == "highway-v0":
+                s = self.config.window_radius_m + 10.0
+                position, heading = lane.position(s, 0.0), lane.heading_at(s)
+            return road, lane_index, position, heading, old.route
+        limit = max(self.config.speed_range_mps[1], self.config.ego_speed_mps) + LIMIT_MARGIN_MPS
+        self._layout = build_layout(self.config.layout, limit, env.np_random)
+        road = env.road = self._layout.road
+        first = road.network.get_lane(self._layout.ego_lane)
+        position = first.position(self.config.window_radius_m + 10.0, 0.0)  # the window behind the ego on the road
+        lane_index = road.network.get_closest_lane_index(position, first.heading_at(0.0))
+        lane = road.network.get_lane(lane_index)
+        heading = lane.heading_at(lane.local_coordinates(position)[0])
+        path = road.network.shortest_path(lane_index[1], self._layout.ego_destination)
+        route = [(*lane_index[:2], None)] + [(a, b, None) for a, b in zip(path[:-1], path[1:], strict=True)]
+        return road, lane_index, position, heading, route
 
     def step(self) -> GroundTruthFrame:
         """Advance one frame (1 / frame rate seconds) and keep the traffic window at its density."""
@@ -200,11 +229,9 @@ class TrafficWorld:
         """The scenario's road with no vehicle on it, and the ego's planned route at the start (highway-env lane
         indices; None on a road without routes): what a planner query on recorded frames needs
         (:func:`~simrig.world.ego_planner.planning_ego`). Call instead of :meth:`reset`."""
-        self.env.reset(seed=self._env_seed)
-        env = self.env.unwrapped
-        route = env.vehicle.route
-        env.road.vehicles = []
-        return env.road, (list(route) if route else None)
+        road, _, _, _, route = self._start()
+        road.vehicles = []
+        return road, (list(route) if route else None)
 
     # ------------------------------------------------------------------ traffic window
     def _others(self) -> list:
@@ -251,11 +278,17 @@ class TrafficWorld:
         road = self.env.unwrapped.road
         rng = self._rng
         ego_position = self.ego.position
-        picks = rng.integers(len(self._lanes), size=attempts)
+        if self._layout is None:
+            picks = rng.integers(len(self._lanes), size=attempts)
+        else:
+            picks, groups = self._layout_picks(attempts, max_distance)
+            if picks is None:
+                return False
         sides = rng.uniform(-1.0, 1.0, size=attempts)  # ahead or behind, anywhere in [min, max] along the lane
         class_rows = rng.choice(len(self._classes), size=attempts, p=self._class_weights)
         speeds = rng.uniform(*self.config.speed_range_mps, size=attempts)
-        destinations = rng.integers(len(self._nodes), size=attempts)
+        if self._layout is None:
+            destinations = rng.integers(len(self._nodes), size=attempts)
         offsets = np.copysign(min_distance + np.abs(sides) * (max_distance - min_distance), sides)
         candidates = []  # (attempt, position, heading) of the placements on the road and in the ring
         for attempt, (pick, offset) in enumerate(zip(picks, offsets, strict=True)):
@@ -285,13 +318,33 @@ class TrafficWorld:
             )
             if join_safely and not _safe_to_join(vehicle, *snapshot.neighbours(along[index], same_lane[index])):
                 continue
-            vehicle.plan_route_to(self._nodes[destinations[attempt]])
+            if self._layout is None:
+                vehicle.plan_route_to(self._nodes[destinations[attempt]])
+            else:
+                group = self._layout.groups[groups[attempt]]
+                vehicle.plan_route_to(group.destination(self._lane_indices[picks[attempt]], float(position[0])))
             vehicle.simrig_id = self._next_id
             self._next_id += 1
             road.vehicles.append(vehicle)
             snapshot.append(vehicle)
             return True
         return False
+
+    def _layout_picks(self, attempts: int, max_distance: float) -> tuple:
+        """``attempts`` lanes (positions in the layout's lanes) and the spawn group of each, drawn among the lanes
+        that come within ``max_distance`` of the ego: each group gets its share of new vehicles, spread evenly over
+        its lanes near the ego. (None, None) when no group has a lane there."""
+        near = np.zeros(len(self._lanes), dtype=bool)
+        distance = np.hypot(*(self._lane_points - self.ego.position).T)
+        near[self._lane_owner[distance <= max_distance]] = True
+        pairs = self._pairs[near[self._pairs[:, 0]]]
+        shares = np.array([group.share for group in self._layout.groups])
+        counts = np.bincount(pairs[:, 1], minlength=len(shares))
+        weights = shares[pairs[:, 1]] / np.maximum(counts[pairs[:, 1]], 1)
+        if not len(pairs) or weights.sum() <= 0.0:
+            return None, None
+        rows = self._rng.choice(len(pairs), size=attempts, p=weights / weights.sum())
+        return pairs[rows, 0], pairs[rows, 1]
 
     def _settle_initial_speeds(self) -> None:
         """At reset, after the window is populated (bumper clearance only, as many as fit): lower initial

@@ -1,0 +1,119 @@
+"""Road layouts (issue 34): the long roads simrig builds keep their traffic alive, and each one's feature works —
+vehicles join from the ramps, leave by the exits, cross at the crossings, and come the other way on two-way roads."""
+
+import numpy as np
+import pytest
+from highway_env.road.road import RoadNetwork
+from simrig.scenarios import load_scenario
+from simrig.scenarios.schema import TrafficConfig
+
+from simrig.seeding import RandomStreams
+from simrig.world import TrafficWorld
+from simrig.world.layouts import LayoutNetwork, build_layout
+from simrig.world.liveness import traffic_liveness
+
+NEW_ROADS = ("merge_surround6", "intersection_surround6", "two_way_surround6", "exit_surround6")
+
+
+@pytest.mark.parametrize("name", NEW_ROADS)
+def test_each_new_road_is_alive_for_200_frames(name):
+    """Check 1 of issue 34 at CI size (tests/perf/road_liveness.py runs 1,000 frames): vehicles in view in every
+    frame, births and deaths in every 100 frames, speeds kept, no ego crash; crashes of others are events."""
+    live = traffic_liveness(load_scenario(name), seed=0, frames=200)
+    assert live.problems() == []
+    assert live.progress_m > 150.0  # the ego drives through the layout (≥ 7.5 m/s on average)
+    assert all(event.startswith(("vehicle_crashed id=", "ego_crashed")) for _, event in live.crashes)
+
+
+def _world(name: str, seed: int = 0) -> TrafficWorld:
+    scenario = load_scenario(name)
+    streams = RandomStreams(seed)
+    return TrafficWorld(scenario.traffic, scenario.frame_rate_hz, env_seed=streams.integer_seed("traffic"),
+                        rng=streams.generator("population"))
+
+
+def _lanes_over_time(world: TrafficWorld, frames: int) -> dict[int, list[tuple]]:
+    """Each vehicle's lane index (highway-env's closest lane) per frame, by simrig id."""
+    world.reset()
+    seen: dict[int, list[tuple]] = {}
+    for _ in range(frames):
+        world.step()
+        for vehicle in world.env.unwrapped.road.vehicles:
+            if vehicle is not world.ego:
+                seen.setdefault(vehicle.simrig_id, []).append(vehicle.lane_index)
+    world.close()
+    return seen
+
+
+def test_ramp_vehicles_merge_onto_the_motorway_and_nobody_changes_into_an_acceleration_lane():
+    lanes = _lanes_over_time(_world("merge_surround6"), 300)
+    from_ramp = [path for path in lanes.values() if path[0][0].startswith(("ramp_", "converge_"))]
+    assert from_ramp, "no vehicle was placed on a ramp"
+    merged = [path for path in from_ramp if any(lane[0].startswith(("merge_", "merged_", "main_")) and
+                                                lane[2] < 3 for lane in path)]
+    assert merged, "no ramp vehicle reached a motorway lane"
+    # a motorway vehicle never moves into an acceleration lane (the last lane of a merge section)
+    for path in lanes.values():
+        if not path[0][0].startswith(("ramp_", "converge_")):
+            assert not any(lane[0].startswith("merge_") and lane[2] == 3 for lane in path)
+
+
+def test_exiting_vehicles_leave_by_the_exit_ramps_and_the_ego_stays_on_the_motorway():
+    world = _world("exit_surround6")
+    lanes = _lanes_over_time(world, 250)
+    left = [path for path in lanes.values() if any(lane[1].startswith("exit_") for lane in path)]
+    assert len(left) >= 2
+    assert not world.ego.lane_index[1].startswith("exit_")
+
+
+def test_side_traffic_crosses_the_main_road_and_oncoming_traffic_comes_the_other_way():
+    world = _world("intersection_surround6")
+    world.reset()
+    crossed, oncoming = set(), set()
+    for _ in range(200):
+        state = world.step()
+        heading = (state.boxes[:, 6] - state.ego.yaw + np.pi) % (2 * np.pi) - np.pi
+        relative = state.boxes[:, :2] - [state.ego.x, state.ego.y]
+        side = np.abs(np.abs(heading) - np.pi / 2) < 0.3
+        # a side vehicle on the main road: its lateral position (world y, left) within the two main lanes
+        on_main = side & (np.abs(relative[:, 1] - 2.0) < 4.0)
+        crossed |= set(state.actor_ids[on_main].tolist())
+        oncoming |= set(state.actor_ids[np.abs(heading) > 3.0].tolist())
+    world.close()
+    assert len(crossed) >= 3 and len(oncoming) >= 3
+
+
+def test_two_way_traffic_passes_at_the_sum_of_the_speeds():
+    world = _world("two_way_surround6")
+    state = world.reset()
+    closing = []
+    for _ in range(100):
+        state = world.step()
+        ego_velocity = np.array([state.ego.vx, state.ego.vy])
+        towards = (state.boxes[:, 7:9] @ ego_velocity) < 0
+        closing += list(np.linalg.norm(state.boxes[towards, 7:9] - ego_velocity, axis=1))
+    world.close()
+    assert closing and max(closing) > 1.8 * np.linalg.norm(ego_velocity)
+
+
+@pytest.mark.parametrize("kind", ["two_way", "ramps", "exits", "crossings"])
+def test_the_indexed_closest_lane_search_gives_highway_envs_answer(kind):
+    """LayoutNetwork searches only nearby lanes; highway-env's own linear search over every lane is the oracle, at
+    random positions and headings on and off the road."""
+    layout = build_layout(TrafficConfig(layout={"kind": kind}).layout, 30.0, np.random.RandomState(0))
+    network = layout.road.network
+    assert isinstance(network, LayoutNetwork)
+    rng = np.random.default_rng(1)
+    points = np.column_stack([rng.uniform(-50.0, 3000.0, 400), rng.uniform(-60.0, 60.0, 400)])
+    on_lanes = [network.get_lane(index).position(s, 0.0) for index in list(network.lanes_dict())[:40]
+                for s in (0.0, 7.0, 30.0)]
+    for position in [*points, *on_lanes]:
+        heading = float(rng.uniform(-np.pi, np.pi))
+        assert network.get_closest_lane_index(position, heading) == RoadNetwork.get_closest_lane_index(
+            network, position, heading)
+
+
+def test_same_seed_same_traffic_on_a_layout():
+    a, b = (traffic_liveness(load_scenario("intersection_surround6"), seed=3, frames=60) for _ in range(2))
+    np.testing.assert_array_equal(a.speed, b.speed)
+    assert a.crashes == b.crashes
