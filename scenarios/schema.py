@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, model_serializer, model_validator
 
 from .base import FiniteFloat, NonNegativeFloat, PathName, PositiveFloat, Strict, set_keys
 from .evaluation_schema import EvaluationConfig
@@ -59,6 +59,15 @@ class TrafficConfig(Strict):
     layout: Layout | None = None
     """A long road simrig builds in place of the environment's own (:mod:`~simrig.scenarios.layout_schema`: oncoming
     lanes, on-ramps, exits, crossings); only with ``env = "highway-v0"``, whose road it replaces."""
+
+    @model_serializer(mode="wrap")
+    def _without_absent_layout(self, handler):
+        """A scenario without a layout dumps as it did before layouts existed, so its manifest, its content key
+        and every dataset cache made for it stay the same."""
+        data = handler(self)
+        if self.layout is None and isinstance(data, dict):
+            data.pop("layout", None)
+        return data
 
     @model_validator(mode="after")
     def _check(self) -> TrafficConfig:

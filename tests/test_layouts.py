@@ -117,3 +117,53 @@ def test_same_seed_same_traffic_on_a_layout():
     a, b = (traffic_liveness(load_scenario("intersection_surround6"), seed=3, frames=60) for _ in range(2))
     np.testing.assert_array_equal(a.speed, b.speed)
     assert a.crashes == b.crashes
+
+
+ROADS_SUITE = """
+name = "roads_small"
+scenarios = ["merge_surround6", "exit_surround6", "two_way_surround6", "intersection_surround6", "two_way_stereo"]
+seeds = [7]
+frames = 12
+
+[[trackers]]
+tracker = "global_hungarian"
+rigs = ["surround6"]
+
+[[trackers]]
+tracker = "sort"
+camera = "left"
+rigs = ["stereo"]
+"""
+
+
+def test_another_process_generates_the_same_bytes_for_each_new_road(tmp_path):
+    """Check 4 of issue 34, across processes: each new scenario's dataset, manifest included, from a fresh process
+    equals this process's."""
+    import os
+    import subprocess
+    import sys
+
+    from simrig.dataset import Dataset
+    from simrig.pipeline.generate import generate
+
+    env = {**os.environ, "PYOPENGL_PLATFORM": "egl"}
+    for name in (*NEW_ROADS, "two_way_stereo"):
+        here = Dataset.open(generate(load_scenario(name), seed=7, out=tmp_path / f"{name}-here", frames=8).path)
+        subprocess.run([sys.executable, "-m", "simrig.cli", "generate", name, "--seed", "7", "--frames", "8", "--out",
+                        str(tmp_path / f"{name}-there"), "--quiet"], check=True, env=env, capture_output=True)
+        there = Dataset.open(tmp_path / f"{name}-there")
+        assert there.manifest == here.manifest, name
+
+
+@pytest.mark.slow
+def test_the_new_roads_give_the_same_bench_bytes_on_the_local_pool_and_ray(tmp_path):
+    """Check 4 of issue 34, across engines."""
+    from simrig.benchmark import run_bench
+
+    pytest.importorskip("ray")
+    suite = tmp_path / "roads.toml"
+    suite.write_text(ROADS_SUITE)
+    local = run_bench(suite, out=tmp_path / "local", workers=2)
+    ray_run = run_bench(suite, out=tmp_path / "ray", engine="ray", workers=2)
+    for name in ("results.parquet", "causes.parquet"):
+        assert (local.out / name).read_bytes() == (ray_run.out / name).read_bytes(), name
