@@ -3,7 +3,8 @@
 A scenario is a TOML file validated by :class:`simrig.scenarios.schema.Scenario`. Catalog entries live next to
 this module (``scenarios/<name>.toml``). A user's file may start from a catalog entry with
 ``extends = "name"`` and override only what it changes; tables are merged key by key, other values are
-replaced.
+replaced. One exception: a ``[traffic] layout`` of the file's own replaces the parent's road — the parent's
+``lanes`` and ``ego_lane``, and its layout when that is of another kind.
 
 >>> load_scenario("highway_surround6").rig.preset
 'surround6'
@@ -79,7 +80,22 @@ def _resolve(path: Path, chain: tuple[Path, ...]) -> dict[str, Any]:
         )
     base = _resolve(entries[parent], (*chain, path))
     base.pop("name", None)  # a derived scenario is named by its own file
-    return merge(base, raw)
+    return merge(_road_replaced(base, raw), raw)
+
+
+def _road_replaced(base: dict[str, Any], raw: dict[str, Any]) -> dict[str, Any]:
+    """``base`` without what describes its road when ``raw`` brings a road layout of its own: a layout replaces
+    the parent's road, so the parent's ``lanes`` and ``ego_lane`` (highway-v0's) are dropped, and a parent's layout
+    of another kind is replaced whole rather than merged key by key (its keys belong to that kind)."""
+    layout = raw.get("traffic", {}).get("layout") if isinstance(raw.get("traffic"), dict) else None
+    traffic = base.get("traffic")
+    if not isinstance(layout, dict) or not isinstance(traffic, dict):
+        return base
+    traffic = {key: value for key, value in traffic.items() if key not in ("lanes", "ego_lane")}
+    inherited = traffic.get("layout")
+    if isinstance(inherited, dict) and inherited.get("kind") != layout.get("kind", inherited.get("kind")):
+        traffic.pop("layout")
+    return {**base, "traffic": traffic}
 
 
 MAX_ERRORS_LISTED = 10

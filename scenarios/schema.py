@@ -63,10 +63,13 @@ class TrafficConfig(Strict):
     @model_serializer(mode="wrap")
     def _without_absent_layout(self, handler):
         """A scenario without a layout dumps as it did before layouts existed, so its manifest, its content key
-        and every dataset cache made for it stay the same."""
+        and every dataset cache made for it stay the same; one with a layout dumps without highway-v0's ``lanes``
+        and ``ego_lane``, which it does not use."""
         data = handler(self)
-        if self.layout is None and isinstance(data, dict):
-            data.pop("layout", None)
+        if isinstance(data, dict):
+            # a layout's road replaces highway-v0's: its lane count and start lane would only mislead a reader
+            for key in ("layout",) if self.layout is None else ("lanes", "ego_lane"):
+                data.pop(key, None)
         return data
 
     @model_validator(mode="after")

@@ -46,6 +46,14 @@ def test_extends_overrides_only_what_it_changes(tmp_path):
         ('[traffic]\nclass_mix = { car = 1, tank = 1 }\n', ["traffic.class_mix.tank"]),
         ('extends = "no_such_entry"\n', ["extends", "no_such_entry", "highway_surround6"]),
         ("frames = [\n", ["not valid TOML"]),
+        ('[traffic]\nenv = "merge-v0"\nlayout = { kind = "ramps" }\n', ["traffic.layout", "env must be highway-v0"]),
+        ('[traffic]\nlanes = 3\nlayout = { kind = "ramps" }\n', ["traffic.lanes", "not with a layout"]),
+        ('[traffic]\nlayout = { kind = "spiral" }\n', ["traffic.layout", "'two_way', 'ramps', 'exits', 'crossings'"]),
+        ('[traffic]\nlayout = { kind = "two_way", oncoming_share = 1.5 }\n', ["traffic.layout.two_way.oncoming_share"]),
+        ('[traffic]\nlayout = { kind = "crossings", side_share = 0.7, oncoming_share = 0.5 }\n',
+         ["traffic.layout.crossings", "side_share + oncoming_share: 0.7 + 0.5 exceeds 1"]),
+        ('[traffic]\nlayout = { kind = "exits", ramp_share = 0.1 }\n',
+         ["traffic.layout.exits.ramp_share", "unknown key"]),
     ],
 )
 def test_bad_scenarios_give_one_line_naming_file_and_key(tmp_path, text, fragments):
@@ -82,3 +90,22 @@ def test_every_catalog_scenario_is_read_back_from_its_manifest_record(name):
 
     scenario = load_scenario(name)
     assert scenario_from_record(scenario.model_dump(mode="json")) == scenario
+
+
+def test_a_layout_of_the_files_own_replaces_the_parents_road(tmp_path):
+    # highway_surround6 sets lanes and ego_lane (highway-v0's); a layout replaces that road, so they are not inherited
+    ramps = load_scenario(_write(tmp_path, 'extends = "highway_surround6"\n[traffic]\n'
+                                           'layout = { kind = "ramps", lanes = 3 }\n', "ramps.toml"))
+    assert ramps.traffic.layout.kind == "ramps" and ramps.traffic.layout.lanes == 3
+    assert ramps.traffic.vehicles == load_scenario("highway_surround6").traffic.vehicles
+    assert "lanes" not in ramps.model_dump(mode="json")["traffic"]
+    # a layout of another kind replaces the parent's whole; one of the same kind merges key by key
+    exits = load_scenario(_write(tmp_path, 'extends = "two_way_surround6"\n[traffic]\nlayout = { kind = "exits" }\n',
+                                 "exits.toml"))
+    assert exits.traffic.layout.kind == "exits" and exits.traffic.layout.exit_share == 0.3
+    fewer = load_scenario(_write(tmp_path, 'extends = "two_way_surround6"\n[traffic.layout]\noncoming_share = 0.2\n',
+                                 "fewer.toml"))
+    assert fewer.traffic.layout.kind == "two_way" and fewer.traffic.layout.oncoming_share == 0.2
+    # a lane count written on top of a layout is still refused
+    with pytest.raises(ScenarioError, match=r"traffic.lanes: not with a layout"):
+        load_scenario(_write(tmp_path, 'extends = "merge_surround6"\n[traffic]\nlanes = 3\n', "lanes.toml"))
