@@ -68,9 +68,10 @@ class ExitsLayout(Strict):
 
 
 class CrossingsLayout(Strict):
-    """A two-way road crossed every ``crossing_spacing_m`` by a two-way side road, with a priority rule: the side
-    roads yield (highway-env's ``RegulatedRoad``, as in ``intersection-v0``). The ego drives through every
-    crossing; others arrive ahead, behind, oncoming and from both side branches."""
+    """A two-way road crossed every ``crossing_spacing_m`` by a two-way side road whose vehicles give way at a stop
+    line: they wait while a main-road vehicle would reach the junction within 4 s
+    (:class:`simrig.world.layouts.CrossingRoad`). The ego drives through every crossing; others arrive ahead,
+    behind, oncoming and from both side branches."""
 
     kind: Literal["crossings"]
     crossing_spacing_m: Annotated[float, Field(ge=100, le=2000, allow_inf_nan=False)] = 200.0

@@ -33,6 +33,7 @@ def smoke_local(tmp_path_factory):
     return run_bench("smoke", out=out, workers=2)
 
 
+@pytest.mark.slow  # the default pass stays under 10 minutes; CI runs the slow pass too
 def test_smoke_local_and_ray_write_identical_tables(smoke_local, tmp_path):
     pytest.importorskip("ray")
     ray_run = run_bench("smoke", out=tmp_path / "smoke-ray", engine="ray", workers=2)

@@ -104,6 +104,7 @@ def test_incomplete_or_tampered_folders_are_not_read_as_datasets(tmp_path, small
         Dataset.open(tmp_path / "d")
 
 
+@pytest.mark.slow  # the default pass stays under 10 minutes; CI runs the slow pass too
 def test_a_generation_killed_halfway_leaves_no_complete_dataset_and_a_rerun_succeeds(tmp_path):
     out = tmp_path / "d"
     command = [sys.executable, "-m", "simrig.cli", "generate", "highway_surround6", "--seed", "3",

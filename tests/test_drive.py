@@ -143,6 +143,7 @@ tracker = "global_hungarian"
 """
 
 
+@pytest.mark.slow  # the default pass stays under 10 minutes; CI runs the slow pass too
 def test_a_closed_loop_bench_row_is_the_drive_scored(tmp_path):
     """A suite with ``closed_loop = true``: the row is the tracker's drive scored on the world it drove, with the
     drive's outcome against the ground-truth drive."""

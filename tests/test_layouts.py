@@ -15,6 +15,7 @@ from simrig.world.liveness import traffic_liveness
 NEW_ROADS = ("merge_surround6", "intersection_surround6", "two_way_surround6", "exit_surround6")
 
 
+@pytest.mark.slow  # 4 × 200 frames of traffic; CI's slow pass runs it
 @pytest.mark.parametrize("name", NEW_ROADS)
 def test_each_new_road_is_alive_for_200_frames(name):
     """Check 1 of issue 34 at CI size (tests/perf/road_liveness.py runs 1,000 frames): vehicles in view in every
@@ -136,6 +137,7 @@ rigs = ["stereo"]
 """
 
 
+@pytest.mark.slow  # the default pass stays under 10 minutes; CI runs the slow pass too
 def test_another_process_generates_the_same_bytes_for_each_new_road(tmp_path):
     """Check 4 of issue 34, across processes: each new scenario's dataset, manifest included, from a fresh process
     equals this process's."""

@@ -99,6 +99,7 @@ def _run_and_interrupt(space: Path, out: Path, cache: Path, gate: Path, evaluati
     return process.returncode, error.decode(), before_signal
 
 
+@pytest.mark.slow  # the default pass stays under 10 minutes; CI runs the slow pass too
 def test_a_search_interrupted_by_sigkill_and_sigint_resumes_without_repeating_or_losing_evaluations(tmp_path):
     space = tmp_path / "tiny.toml"
     space.write_text(TINY, encoding="utf-8")

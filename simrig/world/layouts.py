@@ -2,8 +2,8 @@
 :mod:`~simrig.scenarios.layout_schema`): oncoming lanes, on-ramps, exits and crossings, repeated along a road of
 ``length_m`` so that the ego never runs out of road in a long run.
 
-Each builder returns a :class:`Layout`: the road (a highway-env ``Road``, or a ``RegulatedRoad`` where crossings need
-a priority rule), where the ego starts and where it is going, and the **spawn groups**: the lanes new vehicles are
+Each builder returns a :class:`Layout`: the road (a highway-env ``Road``, or a :class:`CrossingRoad` where side
+streets give way), where the ego starts and where it is going, and the **spawn groups**: the lanes new vehicles are
 placed on, the share of new vehicles each group gets, and where a vehicle of the group is going (a node of the
 network, given the lane and the position it starts at). Geometry follows highway-env: x along the road, y to the
 right, lanes of a segment numbered from the left, ``StraightLane.DEFAULT_WIDTH`` (4 m) wide; a ramp converges
@@ -18,7 +18,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from highway_env.road.lane import AbstractLane, CircularLane, LineType, SineLane, StraightLane
-from highway_env.road.regulation import RegulatedRoad
 from highway_env.road.road import Road, RoadNetwork
 from highway_env.vehicle.objects import Obstacle
 
@@ -40,6 +39,21 @@ EXIT_SPEED_MPS = 15.0
 """[m/s] speed limit on an exit ramp."""
 SIDE_ROAD_HALF_M = 150.0
 """[m] how far a side road of a crossing reaches on each side of the main road."""
+JUNCTION_Y = (-1.5 * StraightLane.DEFAULT_WIDTH, 0.5 * StraightLane.DEFAULT_WIDTH)
+"""[m] the main road of a crossings layout across (highway-env frame: the oncoming lane's far edge to the forward
+lane's near edge)."""
+JUNCTION_HALF_M = StraightLane.DEFAULT_WIDTH
+"""[m] half the width of a side street (one lane each way)."""
+GAP_S = 4.0
+"""[s] a side vehicle waits while a main-road vehicle would reach the junction within this (crossing 8 m of main
+road plus its length from a stop takes about 3 s at highway-env's 3 m/s² comfortable acceleration)."""
+STOP_DECELERATION_MPS2 = 5.0
+"""[m/s²] the braking a side vehicle may still use to stop at the line (IDM's own braking limit is 6)."""
+STOP_MARGIN_M = 2.0
+"""[m] a side vehicle stops this far before the junction."""
+APPROACH_M = 3.0
+"""[m] a side vehicle decides whether to give way once it is within its braking distance plus this of the
+junction, so that it stops near the line; farther away it follows the street (and the queue) by its IDM."""
 NEAR_M = 20.0
 """[m] lanes farther than this from a position are left out of its closest-lane search (:class:`LayoutNetwork`)."""
 LIMIT_MARGIN_MPS = 5.0
@@ -267,7 +281,9 @@ def _crossings(config: CrossingsLayout, limit: float, np_random) -> Layout:
             [x + LANE_WIDTH_M / 2, y_south], [x + LANE_WIDTH_M / 2, y_north], line_types=(_N, _C),
             speed_limit=config.side_speed_mps, priority=side_priority))
         side += [(f"north_{k}", f"south_end_{k}", 0), (f"south_{k}", f"north_end_{k}", 0)]
-    road = RegulatedRoad(network=net, np_random=np_random)
+    road = CrossingRoad(network=net, np_random=np_random)
+    road.crossings = positions
+    road.side_speed = config.side_speed_mps
     return Layout(
         road=road, ego_lane=forward[0], ego_destination="main_end",
         groups=(SpawnGroup("forward", tuple(forward), 1.0 - config.side_share - config.oncoming_share,
@@ -275,6 +291,60 @@ def _crossings(config: CrossingsLayout, limit: float, np_random) -> Layout:
                 SpawnGroup("oncoming", tuple(oncoming), config.oncoming_share, lambda lane, x: "back_main_0"),
                 SpawnGroup("side", tuple(side), config.side_share, lambda lane, x: lane[1])),
     )
+
+
+class CrossingRoad(Road):
+    """The road of a ``crossings`` layout: side-street vehicles give way at a stop line.
+
+    highway-env's ``RegulatedRoad`` (``intersection-v0``'s rule) looks for conflicts every 0.5 s, 3 s ahead at
+    constant speeds, and stops the lower-priority vehicle when it finds one; on straight crossings it found some too
+    late, told a side vehicle already at the main road to stop there, and the ego drove into it (seed 102 of
+    ``intersection_surround6``, frame 323). Here, at every simulation step, a side vehicle that can still stop before
+    the main road (its front is more than its braking distance at :data:`STOP_DECELERATION_MPS2`, plus
+    :data:`STOP_MARGIN_M`, from the junction, and at most :data:`APPROACH_M` more) is held (target speed 0) while a
+    main-road vehicle is in the junction or would reach it within :data:`GAP_S` at its speed, and released (target
+    speed: the side street's limit) otherwise. A side vehicle past that point goes on: it is committed. Main-road
+    vehicles, the ego among them, keep their priority and brake, by their IDM, only for what is in their lane. A
+    busy main road holds the side streets for long: gap acceptance, not signals."""
+
+    crossings: np.ndarray = np.zeros(0)
+    """[m] x of each crossing's centre line (highway-env frame)."""
+    side_speed: float = 12.0
+
+    def step(self, dt: float) -> None:
+        self._give_way()
+        super().step(dt)
+
+    def _give_way(self) -> None:
+        main = [v for v in self.vehicles if not str(v.lane_index[0]).startswith(("north_", "south_"))]
+        if len(main):
+            x = np.array([v.position[0] for v in main])
+            velocity = np.array([v.velocity[0] for v in main])
+            half = np.array([v.LENGTH / 2.0 for v in main])
+        for vehicle in self.vehicles:
+            lane_from = str(vehicle.lane_index[0])
+            if not lane_from.startswith(("north_", "south_")):
+                continue
+            centre = float(self.crossings[int(lane_from.split("_")[-1])])
+            southbound = lane_from.startswith("north_")  # from the north end, driving towards +y
+            front = vehicle.position[1] + (vehicle.LENGTH / 2.0 if southbound else -vehicle.LENGTH / 2.0)
+            edge = JUNCTION_Y[0] if southbound else JUNCTION_Y[1]
+            ahead = (edge - front) if southbound else (front - edge)  # [m] to the junction; < 0: in or past it
+            stopping = max(vehicle.speed, 0.0) ** 2 / (2.0 * STOP_DECELERATION_MPS2) + STOP_MARGIN_M
+            if ahead <= stopping or ahead > stopping + APPROACH_M:  # committed, or not yet at the line
+                if getattr(vehicle, "holding", False):
+                    vehicle.holding, vehicle.target_speed = False, self.side_speed
+                continue
+            blocked = False
+            if len(main):
+                near, far = centre - JUNCTION_HALF_M - half, centre + JUNCTION_HALF_M + half  # footprint reaches it
+                moving = np.abs(velocity) > 0.1
+                enter = np.where(velocity > 0, near - x, x - far) / np.where(moving, np.abs(velocity), 1.0)
+                leave = np.where(velocity > 0, far - x, x - near) / np.where(moving, np.abs(velocity), 1.0)
+                inside = (x >= near) & (x <= far)
+                blocked = bool((inside | (moving & (leave > 0.0) & (enter < GAP_S))).any())
+            vehicle.holding = blocked
+            vehicle.target_speed = 0.0 if blocked else self.side_speed
 
 
 def lane_samples(road: Road, lanes: tuple[LaneIndex, ...], step_m: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
