@@ -9,6 +9,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from bench_engines import assert_same_bench_bytes
 from simrig.scenarios import load_scenario
 from simrig.scenarios.overrides import with_setting
 
@@ -167,15 +168,7 @@ def test_a_closed_loop_bench_row_is_the_drive_scored(tmp_path):
 
 @pytest.mark.slow
 def test_a_closed_loop_bench_writes_the_same_bytes_on_the_local_pool_and_ray(tmp_path):
-    from simrig.benchmark import run_bench
-
-    pytest.importorskip("ray")
-    suite = tmp_path / "closed.toml"
-    suite.write_text(CLOSED_SUITE)
-    local = run_bench(suite, out=tmp_path / "local", workers=2)
-    ray_run = run_bench(suite, out=tmp_path / "ray", engine="ray", workers=2)
-    for name in ("results.parquet", "causes.parquet"):
-        assert (local.out / name).read_bytes() == (ray_run.out / name).read_bytes(), name
+    assert_same_bench_bytes(CLOSED_SUITE, tmp_path)
 
 
 def test_a_closed_loop_suite_refuses_what_cannot_drive(tmp_path):

@@ -3,6 +3,7 @@ vehicles join from the ramps, leave by the exits, cross at the crossings, and co
 
 import numpy as np
 import pytest
+from bench_engines import assert_same_bench_bytes
 from highway_env.road.road import RoadNetwork
 from simrig.scenarios import load_scenario
 from simrig.scenarios.schema import TrafficConfig
@@ -160,12 +161,4 @@ def test_another_process_generates_the_same_bytes_for_each_new_road(tmp_path):
 @pytest.mark.slow
 def test_the_new_roads_give_the_same_bench_bytes_on_the_local_pool_and_ray(tmp_path):
     """Check 4 of issue 34, across engines."""
-    from simrig.benchmark import run_bench
-
-    pytest.importorskip("ray")
-    suite = tmp_path / "roads.toml"
-    suite.write_text(ROADS_SUITE)
-    local = run_bench(suite, out=tmp_path / "local", workers=2)
-    ray_run = run_bench(suite, out=tmp_path / "ray", engine="ray", workers=2)
-    for name in ("results.parquet", "causes.parquet"):
-        assert (local.out / name).read_bytes() == (ray_run.out / name).read_bytes(), name
+    assert_same_bench_bytes(ROADS_SUITE, tmp_path)

@@ -60,23 +60,23 @@ def paired_rows(results: pd.DataFrame, scenario: str, metrics: dict) -> list[str
     return lines
 
 
-def losses(results: pd.DataFrame, highway: pd.DataFrame, column: str, digits: int) -> tuple[list[str], pd.DataFrame]:
-    """Section 2 for one metric: its mean on each road minus on the highway, per 3D tracker, with bootstrap
-    intervals."""
+def road_table(results: pd.DataFrame, first: str, samples, digits: int) -> tuple[list[str], pd.DataFrame]:
+    """A table of trackers × roads: ``samples(tracker, scenario)`` gives a tracker's values per seed on a scenario;
+    each cell is the mean on the road minus the mean on the highway with a bootstrap 95% interval (percentile,
+    unpaired: different scenes; ``n.s.``: it holds 0), under the heading ``first`` for the highway's own mean."""
     roads = [s for s in dict.fromkeys(results.scenario) if not s.endswith("stereo")]
-    trackers = list(dict.fromkeys(results[results.scenario.isin(roads)].tracker))
-    base = highway[highway.scenario == HIGHWAY]
-    lines = [f"| tracker | {HIGHWAY} | " + " | ".join(roads) + " |", "|---|---|" + "---|" * len(roads)]
+    trackers = [tracker for tracker in dict.fromkeys(results[results.scenario.isin(roads)].tracker)
+                if samples(tracker, HIGHWAY) is not None]
+    lines = [f"| tracker | {first} | " + " | ".join(roads) + " |", "|---|---|" + "---|" * len(roads)]
     cells = []
     for tracker in trackers:
-        ref = base[base.tracker == tracker][column].to_numpy(dtype=float)
-        row = [f"| {tracker} | {ref.mean():.{digits}f} |"]
+        ref = samples(tracker, HIGHWAY)
+        row = [f"| {tracker} | {ref.mean():{'+' if first.startswith('on ') else ''}.{digits}f} |"]
         for road in roads:
-            values = results[(results.scenario == road) & (results.tracker == tracker)][column].to_numpy(dtype=float)
+            values = samples(tracker, road)
             interval = bootstrap((values, ref), lambda a, b, axis=-1: a.mean(axis=axis) - b.mean(axis=axis),
                                  n_resamples=4000, random_state=np.random.default_rng(0), method="percentile")
-            change = values.mean() - ref.mean()
-            low, high = interval.confidence_interval
+            change, (low, high) = values.mean() - ref.mean(), interval.confidence_interval
             held = " n.s." if low <= 0.0 <= high else ""
             row.append(f" {change:+.{digits}f} [{low:+.{digits}f}, {high:+.{digits}f}]{held} |")
             cells.append({"tracker": tracker, "road": road, "change": change, "low": low, "high": high})
@@ -84,33 +84,23 @@ def losses(results: pd.DataFrame, highway: pd.DataFrame, column: str, digits: in
     return lines, pd.DataFrame(cells)
 
 
-def standing(results: pd.DataFrame, highway: pd.DataFrame, column: str, digits: int) -> tuple[list[str], pd.DataFrame]:
-    """Section 2, relative: each tracker's paired difference to global_hungarian on a road minus the same on the
-    highway (where a tracker's advantage over the baseline shrinks or grows), with bootstrap intervals."""
-    roads = [s for s in dict.fromkeys(results.scenario) if not s.endswith("stereo")]
-    trackers = list(dict.fromkeys(results[results.scenario.isin(roads)].tracker))
-    base, others = trackers[0], trackers[1:]
+def own_values(results: pd.DataFrame, highway: pd.DataFrame, column: str):
+    """Section 2: a tracker's values of ``column`` per seed (the highway's from the ``planner`` bench)."""
+    def samples(tracker: str, scenario: str) -> np.ndarray:
+        frame = highway if scenario == HIGHWAY else results
+        return frame[(frame.scenario == scenario) & (frame.tracker == tracker)][column].to_numpy(dtype=float)
+    return samples
 
-    def paired(frame: pd.DataFrame, scenario: str, tracker: str) -> np.ndarray:
+
+def against_baseline(results: pd.DataFrame, highway: pd.DataFrame, column: str, base: str):
+    """Section 2, relative: a tracker's paired difference to ``base`` per seed (None for ``base`` itself)."""
+    def samples(tracker: str, scenario: str) -> np.ndarray | None:
+        if tracker == base:
+            return None
+        frame = highway if scenario == HIGHWAY else results
         table = frame[frame.scenario == scenario].pivot_table(index="seed", columns="tracker", values=column)
         return (table[tracker] - table[base]).to_numpy(dtype=float)
-
-    lines = [f"| tracker | on {HIGHWAY} | " + " | ".join(roads) + " |", "|---|---|" + "---|" * len(roads)]
-    cells = []
-    for tracker in others:
-        ref = paired(highway, HIGHWAY, tracker)
-        row = [f"| {tracker} | {ref.mean():+.{digits}f} |"]
-        for road in roads:
-            values = paired(results, road, tracker)
-            interval = bootstrap((values, ref), lambda a, b, axis=-1: a.mean(axis=axis) - b.mean(axis=axis),
-                                 n_resamples=4000, random_state=np.random.default_rng(0), method="percentile")
-            change = values.mean() - ref.mean()
-            low, high = interval.confidence_interval
-            held = " n.s." if low <= 0.0 <= high else ""
-            row.append(f" {change:+.{digits}f} [{low:+.{digits}f}, {high:+.{digits}f}]{held} |")
-            cells.append({"tracker": tracker, "road": road, "change": change, "low": low, "high": high})
-        lines.append("".join(row))
-    return lines, pd.DataFrame(cells)
+    return samples
 
 
 def explain_worst(results: pd.DataFrame, worst: pd.Series, scratch: Path) -> list[str]:
@@ -152,10 +142,12 @@ def main() -> int:
                   f"Mean over the seeds; under it the paired difference to `{'sort' if stereo else 'global_hungarian'}`"
                   " per seed with its BCa 95% interval (`n.s.`: it holds 0). Higher is better except IDS, IDSW "
                   "and PKL.", "", *paired_rows(results, scenario, METRICS_2D if stereo else METRICS_3D), ""]
-    amota, _ = losses(results, highway, "3d_AMOTA", 3)
-    switches, cells = losses(results, highway, "3d_IDS", 1)
-    relative_amota, _ = standing(results, highway, "3d_AMOTA", 3)
-    relative_switches, _ = standing(results, highway, "3d_IDS", 1)
+    amota, _ = road_table(results, HIGHWAY, own_values(results, highway, "3d_AMOTA"), 3)
+    switches, cells = road_table(results, HIGHWAY, own_values(results, highway, "3d_IDS"), 1)
+    relative_amota, _ = road_table(results, f"on {HIGHWAY}",
+                                   against_baseline(results, highway, "3d_AMOTA", "global_hungarian"), 3)
+    relative_switches, _ = road_table(results, f"on {HIGHWAY}",
+                                      against_baseline(results, highway, "3d_IDS", "global_hungarian"), 1)
     worst = cells.loc[cells.change.idxmax()]
     lines += ["## Where each 3D tracker loses most", "",
               f"Each road minus `{HIGHWAY}` (the `planner` bench, the same seeds: its column is the highway's own "
