@@ -162,3 +162,38 @@ def test_another_process_generates_the_same_bytes_for_each_new_road(tmp_path):
 def test_the_new_roads_give_the_same_bench_bytes_on_the_local_pool_and_ray(tmp_path):
     """Check 4 of issue 34, across engines."""
     assert_same_bench_bytes(ROADS_SUITE, tmp_path)
+
+
+def test_a_side_vehicle_waits_at_its_stop_line_while_a_main_road_vehicle_would_arrive_within_the_gap():
+    """CrossingRoad's rule on a hand-made scene: one side vehicle 6 m before the junction at 5 m/s (its braking
+    distance at 5 m/s² is 2.5 m, plus the 2 m margin: 4.5 m, so it can still stop, and 6 m is within the 3 m approach
+    zone beyond that), one main-road car at 12 m/s. The junction spans x ∈ [c − 4, c + 4] m; the car's front reaches
+    it after (distance − 4 − 2.3) / 12 s. Farther than the zone, or past its braking point, the side vehicle is left
+    to its IDM."""
+    from simrig.types import ActorClass
+    from simrig.world.layouts import GAP_S, JUNCTION_Y, CrossingRoad
+    from simrig.world.vehicles import VEHICLE_TYPES
+
+    layout = build_layout(TrafficConfig(layout={"kind": "crossings"}).layout, 15.0, np.random.RandomState(0))
+    road = layout.road
+    assert isinstance(road, CrossingRoad)
+    centre = float(road.crossings[0])
+    car = VEHICLE_TYPES[ActorClass.CAR]
+    front_at = JUNCTION_Y[0] - 6.0  # southbound (from the north end, towards +y): its front 6 m before the junction
+    side = car(road, np.array([centre - 2.0, front_at - car.LENGTH / 2]), heading=np.pi / 2, speed=5.0,
+               target_speed=12.0)
+    assert side.lane_index[0] == "north_0"
+    for seconds, held in ((GAP_S - 1.0, True), (GAP_S + 1.0, False)):
+        distance = 4.0 + car.LENGTH / 2 + 12.0 * seconds  # the car's centre before the junction's near edge
+        main = car(road, np.array([centre - distance, 0.0]), heading=0.0, speed=12.0, target_speed=12.0)
+        road.vehicles = [side, main]
+        road._give_way()
+        assert side.holding is held and side.target_speed == (0.0 if held else road.side_speed), seconds
+    near = car(road, np.array([centre - (4.0 + car.LENGTH / 2 + 12.0 * (GAP_S - 1.0)), 0.0]), heading=0.0,
+               speed=12.0, target_speed=12.0)  # would hold a vehicle deciding now
+    for front_at, speed in ((JUNCTION_Y[0] - 20.0, 5.0), (JUNCTION_Y[0] - 3.0, 5.0)):  # too far; committed
+        side = car(road, np.array([centre - 2.0, front_at - car.LENGTH / 2]), heading=np.pi / 2, speed=speed,
+                   target_speed=12.0)
+        road.vehicles = [side, near]
+        road._give_way()
+        assert not getattr(side, "holding", False) and side.target_speed == 12.0
