@@ -81,16 +81,13 @@ class LayoutNetwork(RoadNetwork):
 
     def freeze(self) -> None:
         """Index the lanes for the closest-lane search (call once every lane is added)."""
-        indices, lows, highs = [], [], []
-        for start, ends in self.graph.items():
-            for end, lanes in ends.items():
-                for lane_id, lane in enumerate(lanes):
-                    s = np.linspace(0.0, lane.length, max(2, int(np.ceil(lane.length / 5.0)) + 1))
-                    points = np.array([lane.position(value, 0.0) for value in s])
-                    indices.append((start, end, lane_id))
-                    lows.append(points.min(axis=0) - NEAR_M)
-                    highs.append(points.max(axis=0) + NEAR_M)
-        self._indices, self._boxes = indices, np.stack([np.array(lows), np.array(highs)], axis=1)
+        indices = [(start, end, lane_id) for start, ends in self.graph.items() for end, lanes in ends.items()
+                   for lane_id in range(len(lanes))]
+        points, owners = lane_samples(self, tuple(indices), step_m=5.0)
+        starts = np.flatnonzero(np.r_[True, owners[1:] != owners[:-1]])  # each lane's points are contiguous
+        lows = np.minimum.reduceat(points, starts, axis=0) - NEAR_M
+        highs = np.maximum.reduceat(points, starts, axis=0) + NEAR_M
+        self._indices, self._boxes = indices, np.stack([lows, highs], axis=1)
 
     def get_closest_lane_index(self, position: np.ndarray, heading: float | None = None) -> LaneIndex:
         if self._boxes is not None:
@@ -347,12 +344,14 @@ class CrossingRoad(Road):
             vehicle.target_speed = 0.0 if blocked else self.side_speed
 
 
-def lane_samples(road: Road, lanes: tuple[LaneIndex, ...], step_m: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
+def lane_samples(network: RoadNetwork, lanes: tuple[LaneIndex, ...],
+                 step_m: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
     """Points every ``step_m`` along each of ``lanes`` ``(P, 2)`` (highway-env frame) and the position in ``lanes``
-    of the lane each belongs to ``(P,)``: to find the lanes near the ego in one numpy pass."""
+    of the lane each belongs to ``(P,)``, each lane's points together: to find the lanes near a position in one numpy
+    pass (the spawn window, :class:`LayoutNetwork`'s index)."""
     points, owners = [], []
     for position, index in enumerate(lanes):
-        lane: AbstractLane = road.network.get_lane(index)
+        lane: AbstractLane = network.get_lane(index)
         s = np.linspace(0.0, lane.length, max(2, int(np.ceil(lane.length / step_m)) + 1))
         points.extend(lane.position(value, 0.0) for value in s)
         owners.extend([position] * len(s))

@@ -154,7 +154,7 @@ class TrafficWorld:
         else:
             self._lane_indices = sorted({lane for group in self._layout.groups for lane in group.lanes})
             self._lanes = [road.network.get_lane(index) for index in self._lane_indices]
-            self._lane_points, self._lane_owner = lane_samples(road, tuple(self._lane_indices))
+            self._lane_points, self._lane_owner = lane_samples(road.network, tuple(self._lane_indices))
             position_of = {lane: position for position, lane in enumerate(self._lane_indices)}
             self._pairs = np.array([(position_of[lane], g) for g, group in enumerate(self._layout.groups)
                                     for lane in group.lanes], dtype=np.int64).reshape(-1, 2)
