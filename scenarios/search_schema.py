@@ -30,6 +30,11 @@ A search space is a TOML file, validated strictly like a scenario (an unknown ke
     start = [0, 20]
     length = [1, 15]
 
+``simrig generate --space`` reads the same file (all but the search's keys: tracker, params, objective, budget,
+seeds, confirm_top, confirm_seeds) and also takes ``weights`` on a choice, choices that are tables or lists, and a
+dimension with ``path = "base"`` choosing the base scenario itself (:mod:`simrig.collection`); a search refuses
+those.
+
 Checks that need the layers above (the base scenario's settings, the tracker registry, the scorer's metrics)
 are made by :func:`simrig.search.space.load_space`, which every error passes through with the file's name.
 """
@@ -44,6 +49,9 @@ from pydantic import Field, model_validator
 from .base import FiniteFloat, PathName, Strict
 
 Number = int | FiniteFloat
+BASE_PATH = "base"
+"""A dimension with this path chooses the base scenario itself (``simrig generate --space`` only): its choices
+are catalog names or ``.toml`` files beside the space file; ``base_settings`` apply to each."""
 SPACES_DIR = Path(__file__).resolve().parent / "spaces"
 """The catalog of search spaces: ``scenarios/spaces/<name>.toml``."""
 
@@ -93,6 +101,9 @@ class Dimension(Strict):
     high: Number | None = None
     log: bool = False
     choices: tuple[Any, ...] | None = None
+    weights: tuple[Annotated[FiniteFloat, Field(gt=0)], ...] | None = None
+    """[-] the share of each choice (normalised), for ``simrig generate --space``, which samples a collection;
+    a search explores choices evenly and refuses them. Evenly when omitted."""
     start: tuple[Annotated[int, Field(ge=0)], Annotated[int, Field(ge=0)]] | None = None
     length: tuple[Annotated[int, Field(ge=1)], Annotated[int, Field(ge=1)]] | None = None
 
@@ -133,6 +144,14 @@ class Dimension(Strict):
                     raise ValueError(f"{key}: the range [{low}, {high}] is empty (min is above max)")
         if self.log and not given["range"]:
             raise ValueError("log: only a low/high range can be log-uniform")
+        if self.weights is not None:
+            if not given["choice"]:
+                raise ValueError("weights: only a list of choices can be weighted")
+            if len(self.weights) != len(self.choices):
+                raise ValueError(f"weights: {len(self.weights)} weights for {len(self.choices)} choices; give one "
+                                 "per choice")
+        if self.path == BASE_PATH and (not given["choice"] or not all(isinstance(c, str) for c in self.choices)):
+            raise ValueError("path: 'base' chooses the base scenario: give choices = [catalog names or .toml files]")
         return self
 
     @property
@@ -141,17 +160,33 @@ class Dimension(Strict):
         return (f"{self.path}.start", f"{self.path}.length") if self.kind == "window" else (self.path,)
 
 
-class SearchSpaceConfig(Strict):
-    """A validated search space (structure only; see :func:`simrig.search.space.load_space`)."""
+class SpaceConfig(Strict):
+    """What every space file holds (structure only): a base scenario, settings changed once, and the dimensions
+    that vary. ``simrig generate --space`` reads these keys of any space file; a search adds its own."""
 
     name: PathName
-    """Names the default search folder (``runs/search/NAME``); :mod:`simrig.names`'s rule."""
+    """Names the default output folder (``runs/search/NAME``, ``runs/collections/NAME``); :mod:`simrig.names`'s
+    rule."""
     description: str = ""
     base: Annotated[str, Field(min_length=1)]
     frames: Annotated[int, Field(ge=1, le=1_000_000)] | None = None
     """[-] frames of every evaluated scenario; the base scenario's own when omitted."""
     base_settings: dict[str, Any] = Field(default_factory=dict)
     """Settings of the base scenario by dotted path, changed once before the search."""
+    dimensions: Annotated[tuple[Dimension, ...], Field(min_length=1, max_length=100)]
+
+    @model_validator(mode="after")
+    def _check_names(self) -> SpaceConfig:
+        names = [name for dimension in self.dimensions for name in dimension.names]
+        repeated = sorted({name for name in names if names.count(name) > 1})
+        if repeated:
+            raise ValueError(f"dimensions: {repeated[0]!r} is varied twice")
+        return self
+
+
+class SearchSpaceConfig(SpaceConfig):
+    """A validated search space (structure only; see :func:`simrig.search.space.load_space`)."""
+
     tracker: Annotated[str, Field(min_length=1)] = "saga"
     params: dict[str, Any] = Field(default_factory=dict)
     objective: Objective
@@ -162,15 +197,12 @@ class SearchSpaceConfig(Strict):
     confirm_top: Annotated[int, Field(ge=0, le=1000)] = 3
     """[-] best candidates of the optimiser re-evaluated on ``confirm_seeds`` fresh seeds."""
     confirm_seeds: Annotated[int, Field(ge=1, le=1000)] = 5
-    dimensions: Annotated[tuple[Dimension, ...], Field(min_length=1, max_length=100)]
 
-    @model_validator(mode="after")
-    def _check(self) -> SearchSpaceConfig:
-        names = [name for dimension in self.dimensions for name in dimension.names]
-        repeated = sorted({name for name in names if names.count(name) > 1})
-        if repeated:
-            raise ValueError(f"dimensions: {repeated[0]!r} is varied twice")
-        return self
+
+MAX_SEQUENCES = 1_000_000
+"""The most sequences ``simrig generate --space`` samples into one collection (six-digit sequence folders)."""
+SEARCH_ONLY_KEYS = tuple(key for key in SearchSpaceConfig.model_fields if key not in SpaceConfig.model_fields)
+"""Keys of a space file only a search uses (the tracker, the objective, the budget, ...)."""
 
 
 def space_catalog() -> dict[str, Path]:

@@ -239,10 +239,15 @@ def validate(path: Path, kind: str) -> None:
         from simrig.benchmark.suite import load_suite
 
         load_suite(path)
-    else:
+    else:  # a space: a collection's (simrig generate --space) and, when it has an objective, a search's
+        import tomllib
+
+        from simrig.collection import load_generation_space
         from simrig.search.space import load_space
 
-        load_space(path)
+        load_generation_space(path)
+        if "objective" in tomllib.loads(path.read_text(encoding="utf-8")):
+            load_space(path)
 
 
 def run_page(page: Path, folder: Path, *, slow: bool) -> int:

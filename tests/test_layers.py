@@ -27,7 +27,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "formats": ("simrig.formats",),
     "judging": ("simrig.scoring", "simrig.detector"),
     "pipeline": ("simrig.pipeline",),
-    "orchestration": ("simrig.benchmark", "simrig.search", "simrig.testing", "simrig.explain"),
+    "orchestration": ("simrig.benchmark", "simrig.search", "simrig.testing", "simrig.explain", "simrig.collection"),
     "faces": ("simrig.report", "simrig.figures", "simrig.cli", "simrig.api", "simrig.__main__", "simrig"),
 }
 BELOW_DATA = ("records", "scenarios", "geometry")

@@ -461,8 +461,11 @@ class Dataset:
             parts.append(f"ego pose estimated (position error up to {error.max():.2f} m)")
         return [f"timing    {'; '.join(parts)}"] if parts else []
 
-    def summary(self) -> str:
-        """A few readable lines: scenario, seed, frames, actors, rig, rows, events, capture timing."""
+    def summary_counts(self) -> dict[str, int | float]:
+        """What :meth:`summary` reports, as numbers: ``actors`` (distinct), ``actors_per_frame_min``/``_max``/
+        ``_mean``, ``truth_rows``, ``projection_rows``, ``in_view_pairs`` (actor-camera pairs in view),
+        ``detections``, ``false_positives`` (clutter), ``missed_pairs`` (pairs in view with no detection),
+        ``dropped_frames``; and per class the distinct actors under ``class_counts`` (a dict)."""
         truth = self.columns("ground_truth", ["frame", "actor_id", "class"])
         ids = truth.column("actor_id").to_numpy()
         class_counts = {}
@@ -483,8 +486,20 @@ class Dataset:
             truth_actor = group.column("actor_id").to_numpy()
             clutter += int(np.sum(truth_actor < 0))
             delivered += int(np.sum((truth_actor >= 0) & (group.column("detection").to_numpy() >= 0)))
-        missed = in_view_pairs - delivered
         dropped = int(self.columns("frames", ["dropped"]).column("dropped").to_numpy(zero_copy_only=False).sum())
+        return {
+            "actors": len(unique_ids), "class_counts": class_counts,
+            "actors_per_frame_min": int(per_frame.min()), "actors_per_frame_max": int(per_frame.max()),
+            "actors_per_frame_mean": float(per_frame.mean()), "truth_rows": truth_rows,
+            "projection_rows": projection_rows, "in_view_pairs": in_view_pairs,
+            "detections": self.num_rows("detections"), "false_positives": clutter,
+            "missed_pairs": in_view_pairs - delivered, "dropped_frames": dropped,
+        }
+
+    def summary(self) -> str:
+        """A few readable lines: scenario, seed, frames, actors, rig, rows, events, capture timing."""
+        counts = self.summary_counts()
+        class_counts = counts["class_counts"]
         scenario = self.scenario
         event_text = ", ".join(f"{event['event']} at frame {event['frame']}" for event in self.manifest["events"])
         lines = [
@@ -492,14 +507,15 @@ class Dataset:
             f"scenario  {scenario['name']} ({scenario['traffic']['env']}), seed {self.seed}",
             f"frames    {self.frame_count} at {scenario['frame_rate_hz']:g} Hz "
             f"({self.frame_count / scenario['frame_rate_hz']:.1f} s)",
-            f"actors    {len(unique_ids)} distinct "
+            f"actors    {counts['actors']} distinct "
             f"({', '.join(f'{k} {v}' for k, v in class_counts.items()) or 'none'}); "
-            f"{per_frame.min()}–{per_frame.max()} per frame, mean {per_frame.mean():.1f}",
+            f"{counts['actors_per_frame_min']}–{counts['actors_per_frame_max']} per frame, "
+            f"mean {counts['actors_per_frame_mean']:.1f}",
             f"rig       {self.rig.name}: {', '.join(self.rig.camera_names) or 'no cameras (3D only)'}",
-            f"rows      ground_truth {truth_rows}, projections {projection_rows} "
-            f"({in_view_pairs} in view)",
-            (f"sensor    {self.num_rows('detections')} detections ({clutter} false positives), "
-             f"{missed} actor-camera pairs in view missed; {dropped} frames dropped; "
+            f"rows      ground_truth {counts['truth_rows']}, projections {counts['projection_rows']} "
+            f"({counts['in_view_pairs']} in view)",
+            (f"sensor    {counts['detections']} detections ({counts['false_positives']} false positives), "
+             f"{counts['missed_pairs']} actor-camera pairs in view missed; {counts['dropped_frames']} frames dropped; "
              f"visibility {self.manifest.get('visibility', 'not measured')}") if self.source is None
             else "sensor    none (an imported dataset holds ground truth only)",
             f"events    {event_text or 'none'}",

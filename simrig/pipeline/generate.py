@@ -65,6 +65,16 @@ class GenerateResult:
     times: StageTimes = field(default_factory=StageTimes)
 
 
+def check_generable(scenario: Scenario, frames: int | None = None) -> None:
+    """Raise the :class:`~simrig.scenarios.ScenarioError` :func:`generate` raises before any simulation work —
+    detection latency beyond the last frame, a perturbation or timing table naming a camera the rig lacks —
+    without generating (a few milliseconds: the rig and the sensor model are built and dropped)."""
+    too_late = latency_beyond(scenario, scenario.frames if frames is None else frames)
+    if too_late:
+        raise ScenarioError(too_late)
+    SensorModel(scenario, build_rig(scenario.rig), RandomStreams(0))
+
+
 def generate(
     scenario: Scenario,
     *,

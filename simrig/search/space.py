@@ -22,7 +22,7 @@ from simrig.reading import read_capped
 from simrig.scenarios import Scenario, ScenarioError, describe_errors, load_scenario
 from simrig.scenarios.files import catalog_entry_or_file
 from simrig.scenarios.overrides import get_setting, with_setting
-from simrig.scenarios.search_schema import Dimension, SearchSpaceConfig, space_catalog
+from simrig.scenarios.search_schema import BASE_PATH, Dimension, SearchSpaceConfig, SpaceConfig, space_catalog
 from simrig.scoring.drive_outcome import DRIVE_COLUMNS
 
 from ..errors import SimrigError
@@ -68,7 +68,7 @@ def setting_value(dimension: Dimension, candidate: Candidate) -> Any:
     return candidate[dimension.path]
 
 
-def _extremes(dimension: Dimension) -> list[Candidate]:
+def extremes(dimension: Dimension) -> list[Candidate]:
     """Candidates at a dimension's corners (every choice), to check that each is a valid scenario."""
     if dimension.kind == "choice":
         return [{dimension.path: choice} for choice in dimension.choices]
@@ -78,15 +78,14 @@ def _extremes(dimension: Dimension) -> list[Candidate]:
     return [{start: s, length: n} for s in dimension.start for n in dimension.length]
 
 
-def _path(name_or_path: str | Path) -> Path:
-    return catalog_entry_or_file(name_or_path, space_catalog(), "search space", SearchError)
+def space_path(name_or_path: str | Path, what: str = "search space") -> Path:
+    """The file of a catalog space name or a path (``what`` names it in the error)."""
+    return catalog_entry_or_file(name_or_path, space_catalog(), what, SearchError)
 
 
-def load_space(name_or_path: str | Path, *, tracker: str | None = None, params: dict | None = None,
-               budget: int | None = None, trust_file: bool = False) -> SearchSpace:
-    """The checked search space of a catalog name or a file; ``tracker``/``params``/``budget`` replace the
-    file's. A :class:`SearchError` naming the file and the key otherwise."""
-    path = _path(name_or_path)
+def read_space_file(path: Path) -> dict:
+    """The TOML table of a space file, its ``name`` defaulting to the file's stem; a :class:`SearchError`
+    naming the file when it cannot be read."""
     where = f"search space file {str(path)!r}"
     try:
         raw = tomllib.loads(read_capped(path, "search space file", SearchError).decode("utf-8"))
@@ -95,6 +94,19 @@ def load_space(name_or_path: str | Path, *, tracker: str | None = None, params: 
     except tomllib.TOMLDecodeError as error:
         raise SearchError(f"{where}: not valid TOML: {error}") from None
     raw.setdefault("name", path.stem)
+    return raw
+
+
+def load_space(name_or_path: str | Path, *, tracker: str | None = None, params: dict | None = None,
+               budget: int | None = None, trust_file: bool = False) -> SearchSpace:
+    """The checked search space of a catalog name or a file; ``tracker``/``params``/``budget`` replace the
+    file's. A :class:`SearchError` naming the file and the key otherwise."""
+    path = space_path(name_or_path)
+    where = f"search space file {str(path)!r}"
+    raw = read_space_file(path)
+    if "objective" not in raw:
+        raise SearchError(f"{where}: no [objective]: a space for simrig generate --space, which samples it; a search "
+                          "needs [objective] metric = ..., direction = ...")
     file_tracker = raw.get("tracker")
     if tracker is not None:
         raw["tracker"] = tracker
@@ -112,8 +124,9 @@ def load_space(name_or_path: str | Path, *, tracker: str | None = None, params: 
             check_file_reference(file_tracker, trusted=trust_file, where=where)
         except TrackerReferenceError as error:
             raise SearchError(str(error)) from None
-    base = _base(config, path, where)
-    _check_dimensions(config, base, where)
+    _check_searchable(config, where)
+    base = base_scenario(config, config.base, path, where)
+    check_dimensions(config.dimensions, base, where)
     _check_objective(config, where)
     try:
         build_tracker(config.tracker, dict(config.params))
@@ -122,8 +135,26 @@ def load_space(name_or_path: str | Path, *, tracker: str | None = None, params: 
     return SearchSpace(config, path, base)
 
 
-def _base(config: SearchSpaceConfig, path: Path, where: str) -> Scenario:
-    target = config.base if Path(config.base).suffix != ".toml" else path.parent / config.base
+def _check_searchable(config: SearchSpaceConfig, where: str) -> None:
+    """What only ``simrig generate --space`` samples: a weighted choice, a choice of base, non-scalar choices."""
+    for index, dimension in enumerate(config.dimensions):
+        if dimension.path == BASE_PATH:
+            raise SearchError(f"{where}: dimensions.{index}.path: a search varies one base scenario; choosing the "
+                              "base ('base') is for simrig generate --space")
+        if dimension.weights is not None:
+            raise SearchError(f"{where}: dimensions.{index}.weights: a search explores choices evenly; weights are "
+                              "for simrig generate --space")
+        if dimension.kind == "choice":
+            bad = [c for c in dimension.choices if not isinstance(c, (bool, int, float, str))]
+            if bad:
+                raise SearchError(f"{where}: dimensions.{index}.choices: {bad[0]!r} is not a number, string "
+                                  "or boolean")
+
+
+def base_scenario(config: SpaceConfig, base: str, path: Path, where: str) -> Scenario:
+    """The scenario ``base`` (a catalog name, or a ``.toml`` file beside the space file at ``path``) with the
+    space's frames and ``base_settings`` applied; a :class:`SearchError` prefixed with ``where`` otherwise."""
+    target = base if Path(base).suffix != ".toml" else path.parent / base
     try:
         base = load_scenario(target)
         if config.frames is not None:
@@ -138,8 +169,12 @@ def _base(config: SearchSpaceConfig, path: Path, where: str) -> Scenario:
     return base
 
 
-def _check_dimensions(config: SearchSpaceConfig, base: Scenario, where: str) -> None:
-    for index, dimension in enumerate(config.dimensions):
+def check_dimensions(dimensions: tuple[Dimension, ...], base: Scenario, where: str) -> None:
+    """Every dimension (but a choice of base) names a setting of ``base`` and each of its extreme values makes a
+    valid scenario; a :class:`SearchError` naming the dimension's index and path otherwise."""
+    for index, dimension in enumerate(dimensions):
+        if dimension.path == BASE_PATH:
+            continue
         key = f"dimensions.{index}.path ({dimension.path})"
         try:
             current = get_setting(base, dimension.path)
@@ -153,12 +188,7 @@ def _check_dimensions(config: SearchSpaceConfig, base: Scenario, where: str) -> 
             if last >= base.frames:
                 raise SearchError(f"{where}: dimensions.{index}.length: the window can end at frame {last}, past "
                                   f"the last frame {base.frames - 1} of the {base.frames}-frame scenario")
-        if dimension.kind == "choice":
-            bad = [c for c in dimension.choices if not isinstance(c, (bool, int, float, str))]
-            if bad:
-                raise SearchError(f"{where}: dimensions.{index}.choices: {bad[0]!r} is not a number, string "
-                                  "or boolean")
-        for candidate in _extremes(dimension):
+        for candidate in extremes(dimension):
             try:
                 with_setting(base, dimension.path, setting_value(dimension, candidate))
             except ScenarioError as error:
