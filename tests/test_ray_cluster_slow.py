@@ -5,17 +5,11 @@ cluster is torn down even when a test fails."""
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import signal
-import subprocess
-import sys
-import tempfile
-import time
 from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
+from ray_nodes import ran_on, two_node_cluster
 
 from simrig.benchmark import run_bench
 from simrig.search import run_search
@@ -73,91 +67,12 @@ start = [0, 4]
 length = [1, 7]
 """
 
-STARTUP_S = 90.0
-"""How long a node may take to come up on a busy machine."""
-
-
-def _ray_start(arguments: list[str], temp: Path, env: dict) -> subprocess.Popen:
-    """``ray start ARGUMENTS --block`` in a session of its own (so that the whole node can be ended by its
-    process group, never by name: ``ray stop`` would end every Ray on the machine)."""
-    ray = Path(sys.executable).with_name("ray")
-    log = (temp / "start.log").open("w")
-    return subprocess.Popen([str(ray), "start", *arguments, "--block", "--num-cpus", "1", "--disable-usage-stats",
-                             "--temp-dir", str(temp)], stdout=log, stderr=subprocess.STDOUT, env=env,
-                            cwd=temp, start_new_session=True)  # the node's workers run in their own folder
-
-
-def _end(nodes: list[subprocess.Popen]) -> None:
-    """SIGTERM to every node's process group, SIGKILL to what is left of them after 5 s."""
-    for sig, wait_s in ((signal.SIGTERM, 5.0), (signal.SIGKILL, 5.0)):
-        for node in nodes:
-            try:
-                os.killpg(node.pid, sig)
-            except ProcessLookupError:
-                pass
-        deadline = time.monotonic() + wait_s
-        while time.monotonic() < deadline:
-            if all(subprocess.run(["pgrep", "-g", str(node.pid)], capture_output=True).returncode != 0
-                   for node in nodes):
-                break
-            time.sleep(0.2)
-    for node in nodes:
-        node.wait(timeout=5)
-
-
-def _wait_for_address(temp: Path, head: subprocess.Popen) -> str:
-    marker = temp / "ray_current_cluster"
-    deadline = time.monotonic() + STARTUP_S
-    while time.monotonic() < deadline:
-        if marker.is_file() and marker.read_text().strip():
-            return marker.read_text().strip()
-        if head.poll() is not None:
-            break
-        time.sleep(0.2)
-    raise RuntimeError(f"the Ray head did not start: {(temp / 'start.log').read_text()[-2000:]}")
-
-
-def _wait_for_nodes(address: str, count: int) -> list[dict]:
-    import ray
-
-    ray.init(address=address, log_to_driver=False)
-    try:
-        deadline = time.monotonic() + STARTUP_S
-        while time.monotonic() < deadline:
-            alive = [node for node in ray.nodes() if node["Alive"]]
-            if len(alive) == count:
-                return alive
-            time.sleep(0.5)
-        raise RuntimeError(f"{len(alive)} of {count} Ray nodes came up")
-    finally:
-        ray.shutdown()
-
-
 @pytest.fixture(scope="module")
 def cluster():
     """(address, worker node's temp folder) of a two-node cluster of one CPU each; ended after the module."""
     pytest.importorskip("ray")
-    temps = [Path(tempfile.mkdtemp(prefix="sr", dir="/tmp")) for _ in range(2)]  # short: Ray's socket paths
-    # a cluster of our own on loopback: no token to share (Ray's token authentication is for real networks)
-    env = os.environ | {"RAY_AUTH_MODE": "disabled", "PYOPENGL_PLATFORM": "egl"}
-    previous = os.environ.get("RAY_AUTH_MODE")
-    os.environ["RAY_AUTH_MODE"] = "disabled"  # this process is the driver
-    nodes: list[subprocess.Popen] = []
-    try:
-        nodes.append(_ray_start(["--head", "--port", "0", "--include-dashboard", "false"], temps[0], env))
-        address = _wait_for_address(temps[0], nodes[0])
-        nodes.append(_ray_start(["--address", address, "--dashboard-agent-listen-port", "0"], temps[1], env))
-        alive = _wait_for_nodes(address, 2)
-        assert [node["Resources"].get("CPU") for node in alive] == [1.0, 1.0]
-        yield address, temps[1]
-    finally:
-        _end(nodes)
-        if previous is None:
-            os.environ.pop("RAY_AUTH_MODE", None)
-        else:
-            os.environ["RAY_AUTH_MODE"] = previous
-        for temp in temps:
-            shutil.rmtree(temp, ignore_errors=True)
+    with two_node_cluster() as (address, second_node):
+        yield address, second_node
 
 
 @pytest.fixture(scope="module")
@@ -167,13 +82,6 @@ def files(tmp_path_factory):
     (folder / "tiny_cluster.toml").write_text(SUITE)
     (folder / "tiny_cluster_space.toml").write_text(SPACE)
     return folder
-
-
-def _ran_on(node_temp: Path, function: str) -> bool:
-    """Whether a worker of the node with temp folder ``node_temp`` ran ``function`` (Ray marks each task in its
-    worker's log with ``:task_name:FUNCTION``)."""
-    return any(f":task_name:{function}" in log.read_text(errors="replace")
-               for log in node_temp.glob("session_*/logs/worker-*.out"))
 
 
 def test_bench_on_a_two_node_cluster_writes_the_local_tables(cluster, files, tmp_path, monkeypatch):
@@ -187,7 +95,7 @@ def test_bench_on_a_two_node_cluster_writes_the_local_tables(cluster, files, tmp
         assert (ray_run.out / name).read_bytes() == (local_run.out / name).read_bytes(), name
     assert pq.read_table(ray_run.results).num_rows == 8  # 4 cells × 2 trackers
     assert len(list(cache.iterdir())) >= 4  # the cluster's workers wrote the datasets into the shared cache
-    assert _ran_on(second_node, "evaluate")  # the second node did part of the work
+    assert ran_on(second_node, "evaluate")  # the second node did part of the work
 
 
 def _evaluations(out: Path) -> dict[str, dict]:
@@ -210,4 +118,20 @@ def test_search_on_a_two_node_cluster_makes_the_local_evaluations(cluster, files
     assert _evaluations(on_ray.out) == _evaluations(local.out) != {}
     tables = [pq.read_table(run.results).drop_columns(["seconds"]).to_pandas() for run in (on_ray, local)]
     assert tables[0].equals(tables[1]) and len(tables[0]) == 7  # NaN equals NaN here (pyarrow's equals: not)
-    assert _ran_on(second_node, "run_seed")
+    assert ran_on(second_node, "run_seed")
+
+
+def test_a_collection_on_a_two_node_cluster_is_the_local_one(cluster, files, tmp_path):
+    from simrig.collection import generate_collection
+
+    address, second_node = cluster
+    space = files / "tiny_collection.toml"
+    space.write_text('name = "tiny_collection"\nbase = "tiny_highway.toml"\nframes = 4\n[[dimensions]]\n'
+                     'path = "traffic.vehicles"\nlow = 1\nhigh = 5\n')
+    on_ray = generate_collection(space, count=6, out=tmp_path / "ray", engine="ray", address=address)
+    local = generate_collection(space, count=6, out=tmp_path / "local", workers=1)
+    assert on_ray.made == local.made == 6
+    files_of = [{str(p.relative_to(run.out)): p.read_bytes() for p in sorted(run.out.rglob("*"))
+                 if p.is_file() and p.name != ".lock"} for run in (on_ray, local)]
+    assert files_of[0] == files_of[1]
+    assert ran_on(second_node, "make_sequence")

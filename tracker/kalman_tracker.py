@@ -21,7 +21,7 @@ filterpy, and keeps the orientation correction per detection.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -162,21 +162,28 @@ class KalmanTracker:
         n, m = len(tracks), len(detections)
         if n == 0 or m == 0:
             return np.zeros((n, m))
+        cost = np.empty((n, m))
+        for columns, predicted, innovation in self.predictions(detections, tracks):
+            cost[:, columns] = self.cost(predicted, innovation, detections.boxes3d[columns])
+        labels = np.array([track.label for track in tracks])
+        return np.where(labels[:, None] == detections.labels[None, :], cost, np.inf)
+
+    def predictions(self, detections: DetectionArrays,
+                    tracks: list[KalmanTrack]) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """(columns, predicted boxes ẑ (N, 7), innovation covariances S (N, 7, 7)) per distinct capture time of
+        ``detections`` (``columns``: the (M,) mask of the detections taken then): every track predicted to that
+        time with its velocity — one block when no detection has a capture offset."""
         predicted = np.stack([track.kf.x[:7, 0] for track in tracks])
         innovation = motion.innovation_covariances(np.stack([track.kf.P for track in tracks]), self.kalman)
         offsets = self.capture_offsets(detections)
         if not offsets.any():
-            cost = self.cost(predicted, innovation, detections.boxes3d)
-        else:  # each track predicted to each capture time: one cost block per distinct capture time
-            cost = np.empty((n, m))
-            velocities = self._velocities(tracks)
-            for offset in np.unique(offsets):
-                columns = offsets == offset
-                moved = predicted.copy()
-                moved[:, :2] += velocities * offset
-                cost[:, columns] = self.cost(moved, innovation, detections.boxes3d[columns])
-        labels = np.array([track.label for track in tracks])
-        return np.where(labels[:, None] == detections.labels[None, :], cost, np.inf)
+            yield np.ones(len(detections), dtype=bool), predicted, innovation
+            return
+        velocities = self._velocities(tracks)
+        for offset in np.unique(offsets):
+            moved = predicted.copy()
+            moved[:, :2] += velocities * offset
+            yield offsets == offset, moved, innovation
 
     def associate(self, detections: DetectionArrays) -> np.ndarray:
         """owner (M,): the track index each detection is assigned to, or −1."""
