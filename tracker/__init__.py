@@ -7,7 +7,8 @@ Registered here: ``saga`` (SAGA-Track with FOTA), ``global_hungarian`` (AB3DMOT-
 (3D tracks projected into every camera, associated there), ``polymot`` (the modern filter baseline:
 category-specific motion, multi-cue cost, two-stage association), the 2D per-camera trackers ``sort``,
 ``deepsort``, ``bytetrack`` and ``botsort`` (BoT-SORT-style: IoU and appearance fused, ego-motion
-compensation), and ``collabmot`` (stereo collaboration on top of them).
+compensation), ``collabmot`` (stereo collaboration on top of them), and ``learned`` (the Kalman tracker with a
+learned association in place of the Mahalanobis gate, trained on simrig data).
 """
 
 from .botsort import botsort
@@ -16,6 +17,7 @@ from .collabmot import collabmot
 from .deepsort import deepsort
 from .errors import TrackerInputError
 from .global_hungarian import global_hungarian
+from .learned import learned
 from .mutr3d import mutr3d
 from .percam_merge import percam_merge
 from .polymot import polymot
@@ -37,7 +39,13 @@ for _name, _factory in (
     ("polymot", polymot),
     ("bytetrack", bytetrack),
     ("botsort", botsort),
+    ("learned", learned),
 ):
     register(_name, _factory)
 
-__all__ = ["Tracker", "TrackerInputError", "available", "create", "parameters", "register"]
+TRAINED_ON_SIMRIG = ("learned",)
+"""Registered trackers whose model was trained on simrig data: not reference trackers (the papers' methods and the
+Kalman baselines, every one in the ``standard`` suite) but compared with them in the ``learned`` suite, on the road
+types they were trained on and on one held out."""
+
+__all__ = ["TRAINED_ON_SIMRIG", "Tracker", "TrackerInputError", "available", "create", "parameters", "register"]
