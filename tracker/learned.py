@@ -4,8 +4,9 @@ simrig data (:mod:`simrig.collection.train`).
 
 The model is a logistic regression on the features of :mod:`.association_features` and their squares, each
 standardised: P = σ(b + Σₖ wₖ (φₖ − μₖ) / sₖ). It is stored as JSON (numbers only: loading a model runs no code)
-and applied with numpy. A pair's cost is 1 − P; a pair may match when P ≥ ``threshold`` (the gate is
-1 − threshold); pairs of different classes, or farther apart than ``prefilter_m``, never match.
+and applied with numpy. A pair's cost is its negative log-odds −ln(P / (1 − P)), so that the Hungarian
+assignment maximises the summed log-likelihood ratio of its pairs; a pair may match when P ≥ ``threshold``;
+pairs of different classes, or farther apart than ``prefilter_m``, never match.
 
 Appearance: each track keeps an exponential moving average of its detections' embeddings (momentum 0.9, as
 DeepSORT's successors), renormalised to a unit vector.
@@ -72,11 +73,15 @@ class AssociationModel:
         if not self.prefilter_m > 0:
             raise ModelError(f"prefilter_m: positive [m], got {self.prefilter_m!r}")
 
+    def log_odds(self, features: np.ndarray) -> np.ndarray:
+        """ln(P / (1 − P)) of (..., F) pair features: the log-likelihood ratio of "same object" (with the
+        training set's prior)."""
+        z = (design(features) - np.asarray(self.mean)) / np.asarray(self.scale)
+        return z @ np.asarray(self.coef) + self.intercept
+
     def probability(self, features: np.ndarray) -> np.ndarray:
         """P(same object) of (..., F) pair features."""
-        z = (design(features) - np.asarray(self.mean)) / np.asarray(self.scale)
-        logit = z @ np.asarray(self.coef) + self.intercept
-        return 1.0 / (1.0 + np.exp(-np.clip(logit, -50.0, 50.0)))
+        return 1.0 / (1.0 + np.exp(-np.clip(self.log_odds(features), -50.0, 50.0)))
 
     def to_json(self) -> str:
         return json.dumps({"format": MODEL_FORMAT, "features": list(TRACK_FEATURES), "basis": "each feature, then "
@@ -194,13 +199,14 @@ class AppearanceKalmanTracker(KalmanTracker):
 
 @dataclass(frozen=True)
 class LearnedCost:
-    """1 − P(same object) of the model; the gate 1 − threshold."""
+    """The cost of a pair is minus its log-odds of being the same object (so the Hungarian assignment maximises the
+    summed log-likelihood ratio of its pairs); the gate is minus the log-odds of ``threshold``."""
 
     model: AssociationModel
 
     @property
     def gate(self) -> float:
-        return 1.0 - self.model.threshold
+        return -math.log(self.model.threshold / (1.0 - self.model.threshold))
 
 
 class LearnedTracker(AppearanceKalmanTracker):
@@ -212,7 +218,7 @@ class LearnedTracker(AppearanceKalmanTracker):
             return np.zeros((len(tracks), len(detections)))
         features = self.pair_features(detections, tracks)
         model = self.cost.model
-        cost = 1.0 - model.probability(features)
+        cost = -model.log_odds(features)
         labels = np.array([track.label for track in tracks])
         allowed = (labels[:, None] == detections.labels[None, :]) & (features[..., 1] <= model.prefilter_m)
         return np.where(allowed, cost, np.inf)
