@@ -158,6 +158,7 @@ def test_the_sampled_settings_meet_the_declared_distribution(tmp_path):
             assert test.pvalue > 0.99
 
 
+@pytest.mark.slow  # a 40-sequence collection (~30 s); the sampling test above checks the shares in the default pass
 def test_the_index_of_a_collection_meets_the_declared_shares(tmp_path):
     """The same on the index table a user reads: 40 sequences, the blackout in 8 (20 %), heavy clutter in 10."""
     run = generate_collection(_space(tmp_path), count=40, out=tmp_path / "c", seed=3, workers=2)

@@ -107,12 +107,12 @@ def concatenated(frames: list[FramePairs]) -> dict[str, np.ndarray]:
 
 def torch_dataset(pairs: CollectionPairs, *, window: int = 1):
     """A ``torch.utils.data.Dataset`` of ``pairs``' windows of ``window`` frames, each a dict of tensors
-    (:func:`concatenated`), read once into memory. Needs torch (``pip install torch``)."""
+    (:func:`concatenated`), read once into memory. Needs torch (the ``torch`` extra, or any torch you have)."""
     try:
         import torch
         from torch.utils.data import Dataset as TorchDataset
     except ImportError:
-        raise ImportError("torch_dataset needs PyTorch: pip install torch") from None
+        raise ImportError("torch_dataset needs PyTorch: pip install 'simrig-mot[torch]'") from None
 
     items = [{name: torch.as_tensor(value) for name, value in part.items()} for part in pairs.windows(window)]
 
