@@ -134,8 +134,9 @@ def _cmd_generate_collection(args: argparse.Namespace) -> int:
         print(f"simrig: {stop.message()}", file=sys.stderr)
         return 130
     seconds = time.perf_counter() - started
+    rate = f" ({60 * result.made / max(seconds, 1e-9):.1f} sequences/min made)" if result.made else ""
     print(f"collection {result.out}: {result.sequences} sequences ({result.kept} finished earlier, {result.made} "
-          f"made now) in {seconds:.1f} s ({60 * result.made / max(seconds, 1e-9):.1f} sequences/min made)")
+          f"made now) in {seconds:.1f} s{rate}")
     print(f"index      {result.index}")
     return 0
 

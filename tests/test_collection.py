@@ -17,6 +17,7 @@ from scipy import stats
 from simrig.cli import main
 from simrig.collection import generate_collection, load_generation_space
 from simrig.collection.sampling import FIRST_SEQUENCE_SEED, choice_shares, sample_candidates, sequence_seed
+from simrig.errors import SimrigError
 from simrig.search import SearchError, load_space
 
 SMALL_SPACE = """
@@ -96,9 +97,9 @@ def test_a_rerun_keeps_every_finished_sequence_and_another_collection_in_the_fol
     again = generate_collection(space, count=4, out=tmp_path / "c", seed=1, workers=1)
     assert (again.kept, again.made) == (4, 0)
     assert _files(again.out) == before
-    with pytest.raises(SearchError, match=r"holds another collection \(its count differ\)"):
+    with pytest.raises(SearchError, match=r"holds another collection \(its count differs\)"):
         generate_collection(space, count=5, out=tmp_path / "c", seed=1, workers=1)
-    with pytest.raises(SearchError, match=r"its seed differ"):
+    with pytest.raises(SearchError, match=r"its seed differs"):
         generate_collection(space, count=4, out=tmp_path / "c", seed=2, workers=1)
 
 
@@ -286,3 +287,13 @@ def test_the_local_pool_and_ray_make_the_same_collection(tmp_path):
     local = generate_collection(space, count=6, out=tmp_path / "local", seed=4, workers=2)
     ray_run = generate_collection(space, count=6, out=tmp_path / "ray", seed=4, workers=2, engine="ray")
     assert _files(local.out) == _files(ray_run.out)
+
+
+def test_the_ray_engine_without_ray_is_refused_before_the_folder_is_made(tmp_path, monkeypatch):
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "ray" else real(name, *a))
+    with pytest.raises(SimrigError, match=r"--engine ray needs Ray: pip install 'simrig-mot\[ray\]'"):
+        generate_collection(_space(tmp_path), count=2, out=tmp_path / "ray", engine="ray")
+    assert not (tmp_path / "ray").exists()

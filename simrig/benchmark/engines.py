@@ -119,6 +119,17 @@ def stop_workers(pool: ProcessPoolExecutor) -> None:
             process.kill()
 
 
+RAY_MISSING = "--engine ray needs Ray: pip install 'simrig-mot[ray]'"
+
+
+def require_ray() -> None:
+    """Refuse ``--engine ray`` before any work when Ray is not installed (found without importing it)."""
+    import importlib.util
+
+    if importlib.util.find_spec("ray") is None:
+        raise SimrigError(RAY_MISSING)
+
+
 @contextmanager
 def ray_session(workers: int | None, address: str | None) -> Iterator[ModuleType]:
     """The ``ray`` module, connected: to the cluster at ``address`` (or ``RAY_ADDRESS``) when one is given,
@@ -127,7 +138,7 @@ def ray_session(workers: int | None, address: str | None) -> Iterator[ModuleType
     try:
         import ray
     except ImportError:
-        raise SimrigError("--engine ray needs Ray: pip install 'simrig-mot[ray]'") from None
+        raise SimrigError(RAY_MISSING) from None
     started_here = not ray.is_initialized()
     if started_here:
         if address or os.environ.get("RAY_ADDRESS"):

@@ -25,7 +25,7 @@ from simrig.scenarios import ScenarioError
 from simrig.scenarios.search_schema import MAX_SEQUENCES
 
 from ..benchmark.engine_names import ENGINES
-from ..benchmark.engines import Interrupted, local_map, machine_workers, ray_map
+from ..benchmark.engines import Interrupted, local_map, machine_workers, ray_map, require_ray
 from ..benchmark.results import write_table_atomic
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import check_output_path, check_own_folder, folder_lock
@@ -113,6 +113,8 @@ def _check_options(count: int, seed: int, shard_size: int, engine: str, workers:
         raise SearchError(f"--shard-size {shard_size!r}: must be a whole number from 1 to {MAX_SEQUENCES:,}")
     if engine not in ENGINES:
         raise SearchError(f"--engine {engine!r}: choose one of {', '.join(ENGINES)}")
+    if engine == "ray":
+        require_ray()
     if workers is not None and workers < 1:
         raise SearchError(f"--workers {workers}: must be at least 1")
 
@@ -141,7 +143,8 @@ def _check_same_collection(out: Path, description: dict) -> None:
         raise SearchError(f"{path}: not a collection file simrig wrote; choose another --out")
     differ = [key for key in IDENTITY_KEYS if earlier.get(key) != description[key]]
     if differ:
-        raise SearchError(f"--out {str(out)!r} holds another collection (its {', '.join(differ)} differ): a rerun "
+        verb = "differs" if len(differ) == 1 else "differ"
+        raise SearchError(f"--out {str(out)!r} holds another collection (its {' and '.join(differ)} {verb}): a rerun "
                           "resumes only the same space, seed, count and shard size; choose another --out")
 
 
