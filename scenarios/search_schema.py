@@ -173,10 +173,14 @@ class SpaceConfig(Strict):
     """[-] frames of every evaluated scenario; the base scenario's own when omitted."""
     base_settings: dict[str, Any] = Field(default_factory=dict)
     """Settings of the base scenario by dotted path, changed once before the search."""
-    dimensions: Annotated[tuple[Dimension, ...], Field(min_length=1, max_length=100)]
+    dimensions: Annotated[tuple[Dimension, ...], Field(max_length=100)]
+    """At least one (checked after the dimensions themselves, so that a file whose only dimension is invalid gets
+    that dimension's error alone)."""
 
     @model_validator(mode="after")
     def _check_names(self) -> SpaceConfig:
+        if not self.dimensions:
+            raise ValueError("dimensions: give at least one [[dimensions]] table")
         names = [name for dimension in self.dimensions for name in dimension.names]
         repeated = sorted({name for name in names if names.count(name) > 1})
         if repeated:
