@@ -167,7 +167,8 @@ def _cmd_generate(args: argparse.Namespace) -> int:
     print(
         f"time      {process:.1f} s in all: start-up (imports, scenario) {process - times.total:.1f} s, "
         f"generation {times.total:.1f} s — traffic {times.traffic:.1f} s, projection {times.projection:.1f} s, "
-        f"visibility {times.visibility:.1f} s, sensor {times.sensor:.1f} s, images {times.images:.1f} s, "
+        f"visibility {times.visibility:.1f} s, sensor {times.sensor:.1f} s, plans {times.planning:.1f} s, "
+        f"images {times.images:.1f} s, "
         f"writing {times.writing:.1f} s ({result.manifest['frames'] / times.total:.1f} frames/s)"
     )
     for event in result.manifest["events"]:

@@ -16,7 +16,7 @@ from simrig.scenarios.schema import TrafficConfig
 from simrig.classes import CLASS_SPECS
 from simrig.dataset import Dataset
 from simrig.dataset.ground_truth import load_ground_truth
-from simrig.dataset.tracks_file import write_tracks
+from simrig.dataset.tracks_file import read_tracks, write_tracks
 from simrig.scoring import score
 from simrig.scoring.planner import LANE_SLIP, PlanningRoad, divergence
 from simrig.seeding import RandomStreams
@@ -223,3 +223,75 @@ def test_every_road_of_the_catalog_is_planned(tmp_path):
     report = score(dataset, tmp_path / "perfect")
     assert report.metrics3d["planner"] == {"scored": True} and report.metrics3d["overall"]["PKL"] == 0.0
     assert len(report.plan) == 40
+
+
+def _plain_truth_plans(dataset, truth) -> tuple[list, dict]:
+    """The plans on the ground truth and each read vehicle's consequence without the generation's shortcuts: one
+    query per frame, and one more per read vehicle, each searching every lane afresh."""
+    from simrig.scoring.planner import planner_road_of
+    from simrig.scoring.truth_plans import in_range
+
+    road, plans, consequence = planner_road_of(dataset), [], {}
+    for position, frame in enumerate(truth.frames.tolist()):
+        rows = truth.frame_rows(position)
+        keep = in_range(truth.egos[position], truth.label[rows], truth.boxes[rows])
+        ego = road.ego(truth.egos[position])
+        seen = road.phantoms(truth.boxes[rows][keep], truth.actor_id[rows][keep])
+        on_truth = road.plan_on(ego, seen)
+        plans.append((on_truth.acceleration, on_truth.lane_change, on_truth.leader))
+        for actor in on_truth.read:
+            without = road.plan_on(ego, [phantom for phantom in seen if phantom.ident != actor])
+            consequence[(frame, actor)] = float(divergence(on_truth.acceleration, on_truth.lane_change,
+                                                           without.acceleration, without.lane_change))
+    return plans, consequence
+
+
+@pytest.fixture(scope="module")
+def highway(tmp_path_factory):
+    """``highway_surround6`` seed 3, 30 frames: 40 vehicles, side lanes full of leaders and followers."""
+    from simrig.scenarios.overrides import with_setting
+
+    from simrig.pipeline.generate import generate
+
+    out = tmp_path_factory.mktemp("planner") / "highway"
+    generate(with_setting(load_scenario("highway_surround6"), "render.visibility", False), seed=3, out=out, frames=30)
+    dataset = Dataset.open(out)
+    return dataset, load_ground_truth(dataset)
+
+
+@pytest.mark.parametrize("scene", ["cut_in", "highway"])
+def test_the_plans_a_generation_records_are_the_plain_computation_bit_for_bit(scene, request):
+    """Generation records each frame's plan on the ground truth and what missing each vehicle it reads would
+    change, with two shortcuts (neighbour searches reused; the ego lane's follower weighs 0 at politeness 0): the
+    table equals the plain computation exactly, and the shortcut's zeros are really zeros."""
+    from simrig.scoring.truth_plans import recorded_truth_side
+
+    dataset, truth = request.getfixturevalue(scene)
+    recorded = recorded_truth_side(dataset, truth)
+    plans, consequence = _plain_truth_plans(dataset, truth)
+    assert list(zip(recorded.acceleration.tolist(), recorded.lane_change.tolist(), recorded.leader.tolist(),
+                    strict=True)) == plans
+    assert recorded.consequence == consequence
+    weights = np.array(list(consequence.values()))
+    assert (weights > 0).any() and (weights == 0).any()  # both kinds of vehicle are read
+
+
+def test_scores_on_recorded_plans_equal_scores_on_plans_computed_now(cut_in, tmp_path):
+    """A dataset without the recorded table (generated before it existed) is scored on plans computed at once: the
+    same scores, plan table and consequences."""
+    from simrig.scoring.planner import planner_road_of, planner_scores
+    from simrig.scoring.truth_plans import computed_truth_side, recorded_truth_side
+
+    dataset, truth = cut_in
+    lead = _cut_in_actor(dataset)
+    write_tracks(tmp_path / "gappy", _tracks(truth, keep=lambda frame, actor, box, ego: actor != lead or frame % 3))
+    report = score(dataset, tmp_path / "gappy", planner=False)
+    errors = report.errors.to_pandas()
+    misses = errors[(errors.dimension == "3d") & (errors.kind == "FN")][["frame", "actor_id"]].to_numpy()
+    tracks3d = read_tracks(tmp_path / "gappy", frame_count=len(truth.frames), cameras=truth.rig.camera_names).tracks3d
+    road = planner_road_of(dataset)
+    on_recorded = planner_scores(road, truth, tracks3d, misses, recorded_truth_side(dataset, truth))
+    on_computed = planner_scores(road, truth, tracks3d, misses, computed_truth_side(road, truth))
+    assert on_recorded.metrics == on_computed.metrics and on_recorded.metrics["PKL"] > 0
+    assert on_recorded.frames.equals(on_computed.frames)
+    assert on_recorded.consequence == on_computed.consequence and max(on_recorded.consequence.values()) > 0

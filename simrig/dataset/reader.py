@@ -249,7 +249,7 @@ class Dataset:
 
     def has_table(self, name: str) -> bool:
         """Whether the dataset holds table ``name`` (the optional ones, ``captures`` and ``ego_estimates``, only
-        when its scenario sets capture timing)."""
+        when its scenario sets capture timing; ``truth_plans``, when simrig generated it since it records plans)."""
         return name in self.manifest.get("files", {})
 
     def num_rows(self, name: str) -> int:
@@ -262,7 +262,9 @@ class Dataset:
         if name not in ALL_SCHEMAS:
             raise KeyError(f"unknown table {name!r}; tables: {', '.join(ALL_SCHEMAS)}")
         if name in OPTIONAL_SCHEMAS and not self.has_table(name):
-            raise KeyError(f"dataset {str(self.path)!r} has no {name} table (its scenario sets no capture timing)")
+            why = ("its scenario sets no capture timing" if name != "truth_plans"
+                   else "it was imported, or generated before simrig recorded plans")
+            raise KeyError(f"dataset {str(self.path)!r} has no {name} table ({why})")
         file = self.files.verified(name)
         try:
             parquet = pq.ParquetFile(file)

@@ -21,6 +21,11 @@ ideal rig has the tables it always had:
                   ``projections`` then holds each camera's ground truth at its true capture time.
 ``ego_estimates`` one row per frame: the ego pose the tracker is given (``ego_poses`` keeps the true one).
 
+Written by every generation since the planner-aware scores (datasets made before, and imported ones, lack it):
+
+``truth_plans``   one row per frame: what the ego's planner commands on the ground truth within the class ranges
+                  (:mod:`simrig.scoring.truth_plans`), and the consequence of missing each vehicle it reads.
+
 Rows are sorted by frame; within a frame as described per table, exactly as written.
 """
 
@@ -88,8 +93,17 @@ EGO_ESTIMATES = pa.schema(
         ("x", "y", "z", "yaw", "vx", "vy"), ("m", "m", "m", "rad", "m/s", "m/s"), strict=True
     )]
 )
-OPTIONAL_SCHEMAS: dict[str, pa.Schema] = {"captures": CAPTURES, "ego_estimates": EGO_ESTIMATES}
-"""Tables a dataset holds only when its scenario sets capture timing."""
+TRUTH_PLANS = pa.schema(
+    [pa.field("frame", pa.int32()), pa.field("acceleration", _F64, metadata={"unit": "m/s2"}),
+     pa.field("lane_change", pa.int8()), pa.field("leader", pa.int64()),
+     pa.field("read", pa.list_(pa.int64())), pa.field("consequence", pa.list_(_F64), metadata={"unit": "nats"})],
+    metadata={"lane_change": "-1 left, 0 keep, +1 right", "leader": "actor id followed (-1: free road)",
+              "read": "actor ids the plan read, ascending", "consequence": "KL(plan || plan without that actor)"},
+)
+OPTIONAL_SCHEMAS: dict[str, pa.Schema] = {"captures": CAPTURES, "ego_estimates": EGO_ESTIMATES,
+                                          "truth_plans": TRUTH_PLANS}
+"""Tables a dataset may lack: ``captures`` and ``ego_estimates`` (capture timing only), ``truth_plans`` (imported
+datasets, and those generated before it was recorded)."""
 SCHEMAS: dict[str, pa.Schema] = {
     "ego_poses": EGO_POSES,
     "ground_truth": GROUND_TRUTH,

@@ -27,6 +27,8 @@ from simrig.rig import build_rig, rig_to_dict
 from simrig.scenarios import Scenario, ScenarioError
 from simrig.scenarios.perturbation_schema import WORLD_KINDS
 from simrig.scenarios.timing_schema import latency_beyond
+from simrig.scoring.planner import PlanningRoad
+from simrig.scoring.truth_plans import TruthPlanner
 from simrig.seeding import RandomStreams
 from simrig.sensor.model import SensorModel
 from simrig.types import GroundTruthFrame
@@ -51,6 +53,7 @@ class StageTimes:
     visibility: float = 0.0
     sensor: float = 0.0
     driving: float = 0.0
+    planning: float = 0.0
     images: float = 0.0
     writing: float = 0.0
     total: float = 0.0
@@ -132,6 +135,9 @@ def generate(
     started = time.perf_counter()
     world = (_SimulatedWorld(scenario, rig, streams, images, ego_on_perception=driver is not None)
              if world_from is None else RecordedWorld(world_from, rig))
+    tick = time.perf_counter()
+    plans = _TruthPlans(scenario, seed, world_from)
+    times.planning += time.perf_counter() - tick
     events: list[dict] = []
     try:
         with DatasetWriter(out, overwrite=overwrite) as writer:
@@ -159,6 +165,11 @@ def generate(
 
                 tick = time.perf_counter()
                 columns = frame_columns(state, visibility, output, rig.camera_names)
+                times.writing += time.perf_counter() - tick
+                tick = time.perf_counter()
+                columns["truth_plans"] = plans.row(state)
+                times.planning += time.perf_counter() - tick
+                tick = time.perf_counter()
                 writer.write_frame(columns)
                 times.writing += time.perf_counter() - tick
                 if driver is not None:
@@ -186,6 +197,24 @@ def generate(
         world.close()
     times.total = time.perf_counter() - started
     return GenerateResult(path=out, manifest=manifest, times=times)
+
+
+class _TruthPlans:
+    """The ``truth_plans`` rows of a generation (:mod:`simrig.scoring.truth_plans`): asked of the ego's planner, or,
+    when the world is reused from a dataset that recorded them, its rows (the same ground truth, the same plans)."""
+
+    def __init__(self, scenario: Scenario, seed: int, world_from: Dataset | None):
+        self._recorded = (world_from.table("truth_plans")
+                          if world_from is not None and world_from.has_table("truth_plans") else None)
+        if self._recorded is None:
+            self._planner = TruthPlanner(PlanningRoad(scenario.traffic, scenario.frame_rate_hz, seed))
+
+    def row(self, state: GroundTruthFrame) -> dict:
+        """The row of ``state``'s frame, as column chunks."""
+        if self._recorded is not None:
+            return {name: self._recorded.column(name).slice(state.frame, 1).combine_chunks()
+                    for name in self._recorded.column_names}
+        return self._planner.row(state.frame, state.ego, state.actor_ids, state.classes, state.boxes)
 
 
 class _SimulatedWorld:

@@ -27,7 +27,8 @@ from .counts import combine
 from .hota import HOTA
 from .identity import Identity
 from .inputs import camera_sequences, class_sequences
-from .planner import PLANNER_METRICS, PlanningRoad, planner_road_of, planner_scores
+from .planner import PLANNER_METRICS, planner_road_of, planner_scores
+from .truth_plans import truth_side_of
 
 LOOKBACK_S = 1.0
 """[s] an identity switch is also tagged with the causes of this long before it (see attribution)."""
@@ -92,8 +93,7 @@ def score(dataset: Dataset | Path | str, tracks: TrackSet | Path | str, *, lookb
     if tracks.tracks3d is not None and camera is None and dataset.has_3d:
         metrics3d, errors3d = _score_3d(truth, tracks, lookback, interpolation)
         if planner:
-            errors3d, plan = _planner(metrics3d, errors3d, planner_road_of(dataset), truth, tracks.tracks3d,
-                                       dataset.identity["ground_truth_sha256"])
+            errors3d, plan = _planner(metrics3d, errors3d, dataset, truth, tracks.tracks3d)
         else:
             _not_planned(metrics3d, "not asked")
         errors.append(errors3d)
@@ -149,11 +149,12 @@ def _not_planned(metrics3d: dict, note: str) -> None:
     metrics3d["planner"] = {"scored": False, "note": note}
 
 
-def _planner(metrics3d: dict, errors3d: pa.Table, road: PlanningRoad | None, truth: GroundTruth,
-             tracks3d, key: str) -> tuple[pa.Table, pa.Table | None]:
+def _planner(metrics3d: dict, errors3d: pa.Table, dataset: Dataset, truth: GroundTruth,
+             tracks3d) -> tuple[pa.Table, pa.Table | None]:
     """Adds the planner-aware scores (:mod:`simrig.scoring.planner`) to ``metrics3d["overall"]`` (NaN, with a note
     under ``metrics3d["planner"]``, for a dataset simrig did not simulate) and each 3D miss's consequence to the
     errors; returns the errors and the per-frame plan table (None when not scored)."""
+    road = planner_road_of(dataset)
     if road is None:
         _not_planned(metrics3d, "not scored: the dataset was not simulated by simrig, so there is no ego planner "
                                 "to ask")
@@ -162,7 +163,8 @@ def _planner(metrics3d: dict, errors3d: pa.Table, road: PlanningRoad | None, tru
     frames = errors3d.column("frame").to_numpy()
     actors = errors3d.column("actor_id").to_numpy()
     misses = np.flatnonzero(kinds == "FN")
-    scores = planner_scores(road, truth, tracks3d, np.column_stack([frames[misses], actors[misses]]), key)
+    truth_side = truth_side_of(dataset, road, truth, dataset.identity["ground_truth_sha256"])
+    scores = planner_scores(road, truth, tracks3d, np.column_stack([frames[misses], actors[misses]]), truth_side)
     weight = errors3d.column("consequence").to_numpy(zero_copy_only=False).copy()
     weight[misses] = [scores.consequence.get((int(frames[i]), int(actors[i])), 0.0) for i in misses]
     metrics3d["overall"].update(scores.metrics)

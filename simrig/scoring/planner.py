@@ -38,7 +38,7 @@ the box it leaves behind, which the frame's divergence already counts.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -104,29 +104,18 @@ class PlannerScores:
     consequence: dict[tuple[int, int], float]
 
 
-@dataclass
-class _TruthPlans:
-    """The plans on one ground truth, by frame position (the planning ego, its plan and the phantoms it planned on),
-    and the weights of its misses by (frame, actor id)."""
+@dataclass(frozen=True)
+class TruthSide:
+    """The ground-truth half of the comparison (:mod:`simrig.scoring.truth_plans`), by frame position: the command
+    [m/s²] ``(F,)``, the lane decision ``(F,)`` and the actor followed ``(F,)`` of the plan on the ground truth, the
+    consequence [nats] of missing each vehicle it reads by (frame, actor id) (every other miss weighs 0), and the
+    planning egos when they were built in this process (None: rebuilt from the true poses)."""
 
-    key: str | None
-    plans: dict[int, tuple] = field(default_factory=dict)
-    weights: dict[tuple[int, int], float] = field(default_factory=dict)
-
-
-_remembered = _TruthPlans(None)
-
-
-def _truth_plans(key: str | None) -> _TruthPlans:
-    """The remembered plans of ground truth ``key`` (fresh ones, remembered from now on, for another key; never
-    kept without a key)."""
-    global _remembered
-    if key is None or _remembered.key != key:
-        fresh = _TruthPlans(key)
-        if key is not None:
-            _remembered = fresh
-        return fresh
-    return _remembered
+    acceleration: np.ndarray
+    lane_change: np.ndarray
+    leader: np.ndarray
+    consequence: dict[tuple[int, int], float]
+    egos: list | None = None
 
 
 class PlanningRoad:
@@ -163,9 +152,10 @@ class PlanningRoad:
         keep the lanes they were found on for every later query on them."""
         return self._phantoms(self.road, boxes, idents)
 
-    def plan_on(self, ego, phantoms: list) -> EgoPlan:
-        """What ``ego``'s planner commands on ``phantoms``."""
-        return self._plan(ego, phantoms, self.road)
+    def plan_on(self, ego, phantoms: list, known: dict | None = None) -> EgoPlan:
+        """What ``ego``'s planner commands on ``phantoms`` (``known``: neighbour-search answers still true of them,
+        :func:`~simrig.world.ego_planner.plan`)."""
+        return self._plan(ego, phantoms, self.road, known)
 
 
 def planner_road_of(dataset: Dataset) -> PlanningRoad | None:
@@ -177,44 +167,25 @@ def planner_road_of(dataset: Dataset) -> PlanningRoad | None:
 
 
 def planner_scores(road: PlanningRoad, truth: GroundTruth, tracks3d: TrackRows, misses: np.ndarray,
-                   key: str | None = None) -> PlannerScores:
-    """Open-loop planner-aware scores of ``tracks3d`` (world frame, relative to the true ego) against ``truth``;
-    ``misses`` ``(n, 2)``: the (frame, actor id) of every 3D FN, to be weighed (module docstring).
-
-    ``key`` names the ground truth (its SHA-256): the plans on it, and the weights of its misses, are kept for the
-    next call with the same key (the other trackers on the same dataset: a bench cell, ``simrig explain``'s
-    counterfactuals of one world), so each frame then costs one query, on the tracks."""
-    gt_rows = np.flatnonzero(in_class_range(truth, truth.frame, truth.label, truth.boxes))
+                   truth_side: TruthSide) -> PlannerScores:
+    """Open-loop planner-aware scores of ``tracks3d`` (world frame, relative to the true ego) against ``truth``,
+    whose plans are ``truth_side`` (:func:`simrig.scoring.truth_plans.truth_side_of`: recorded with the dataset, so
+    each frame costs one query, on the tracks); ``misses`` ``(n, 2)``: the (frame, actor id) of every 3D FN, each
+    weighed by its consequence (module docstring)."""
     track_rows = np.flatnonzero(in_class_range(truth, tracks3d.frame, tracks3d.label, tracks3d.boxes))
-    gt_bounds = np.searchsorted(truth.frame[gt_rows], np.stack([truth.frames, truth.frames + 1]))
     track_bounds = np.searchsorted(tracks3d.frame[track_rows], np.stack([truth.frames, truth.frames + 1]))
-    missed_at: dict[int, set[int]] = {}
-    for frame, actor in np.asarray(misses, dtype=np.int64).reshape(-1, 2).tolist():
-        missed_at.setdefault(frame, set()).add(actor)
     f = len(truth.frames)
-    a_truth, a_tracks = np.zeros(f), np.zeros(f)
-    lane_truth, lane_tracks = np.zeros(f, np.int8), np.zeros(f, np.int8)
-    leader_truth, leader_tracks = np.full(f, -1, np.int64), np.full(f, -1, np.int64)
-    consequence: dict[tuple[int, int], float] = {}
-    remembered = _truth_plans(key)
-    for position, frame in enumerate(truth.frames.tolist()):
-        g = gt_rows[gt_bounds[0, position]:gt_bounds[1, position]]
+    a_truth, lane_truth, leader_truth = truth_side.acceleration, truth_side.lane_change, truth_side.leader
+    a_tracks, lane_tracks, leader_tracks = np.zeros(f), np.zeros(f, np.int8), np.full(f, -1, np.int64)
+    for position in range(f):
         t = track_rows[track_bounds[0, position]:track_bounds[1, position]]
-        if position not in remembered.plans:
-            ego = road.ego(truth.egos[position])
-            seen = road.phantoms(truth.boxes[g], truth.actor_id[g])
-            remembered.plans[position] = (ego, road.plan_on(ego, seen), seen)
-        ego, on_truth, seen = remembered.plans[position]
+        ego = road.ego(truth.egos[position]) if truth_side.egos is None else truth_side.egos[position]
         on_tracks = road.plan(ego, tracks3d.boxes[t], tracks3d.track_id[t])
-        a_truth[position], a_tracks[position] = on_truth.acceleration, on_tracks.acceleration
-        lane_truth[position], lane_tracks[position] = on_truth.lane_change, on_tracks.lane_change
-        leader_truth[position], leader_tracks[position] = on_truth.leader, on_tracks.leader
-        for actor in sorted(missed_at.get(frame, set()) & on_truth.read):
-            if (frame, actor) not in remembered.weights:
-                without = road.plan_on(ego, [phantom for phantom in seen if phantom.ident != actor])
-                remembered.weights[(frame, actor)] = float(divergence(
-                    on_truth.acceleration, on_truth.lane_change, without.acceleration, without.lane_change))
-            consequence[(frame, actor)] = remembered.weights[(frame, actor)]
+        a_tracks[position], lane_tracks[position], leader_tracks[position] = (on_tracks.acceleration,
+                                                                              on_tracks.lane_change, on_tracks.leader)
+    consequence = {pair: truth_side.consequence[pair]
+                   for pair in map(tuple, np.asarray(misses, dtype=np.int64).reshape(-1, 2).tolist())
+                   if pair in truth_side.consequence}
     kl = divergence(a_truth, lane_truth, a_tracks, lane_tracks)
     missed = (a_truth <= -HAZARD_MPS2) & (a_tracks - a_truth >= HAZARD_MPS2)
     invented = (a_tracks <= -HAZARD_MPS2) & (a_truth - a_tracks >= HAZARD_MPS2)

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import copy
 import types
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from highway_env.road.road import Road
@@ -36,24 +36,29 @@ class EgoPlan:
 
     acceleration [m/s²]; lane_change: −1 left, 0 keep, +1 right; leader: the ident of the
     vehicle ahead in the ego's lane (−1: free road); read: the idents of every vehicle a neighbour search returned —
-    the vehicles the plan depends on (removing any other leaves the plan unchanged)."""
+    the vehicles the plan depends on (removing any other leaves the plan unchanged); lane: the ego's lane index;
+    searches: each neighbour search's answer by lane index, (front, rear) phantoms or None (for a further query on
+    a subset of the same phantoms, :class:`~simrig.world.phantoms.PhantomRoad`'s ``known``)."""
 
     acceleration: float
     lane_change: int
     leader: int
     read: frozenset[int]
+    lane: tuple | None = field(default=None, compare=False)
+    searches: dict = field(default_factory=dict, compare=False, repr=False)
 
 
-def plan(ego: IDMVehicle, phantoms: list, real_road: Road) -> EgoPlan:
+def plan(ego: IDMVehicle, phantoms: list, real_road: Road, known: dict | None = None) -> EgoPlan:
     """The command ``ego``'s IDM/MOBIL would give if ``real_road`` held only ``phantoms`` (module docstring).
 
-    ``ego`` is left exactly as it was (a shallow copy decides); MOBIL is evaluated now whatever its timer says."""
+    ``ego`` is left exactly as it was (a shallow copy decides); MOBIL is evaluated now whatever its timer says.
+    ``known``: neighbour-search answers still true of ``phantoms`` (:class:`~simrig.world.phantoms.PhantomRoad`)."""
     probe = copy.copy(ego)
     if ego.route:
         probe.route = list(ego.route)
     if probe.lane_index == probe.target_lane_index:
         probe.timer = np.inf  # utils.do_every(LANE_CHANGE_DELAY, inf): MOBIL decides now
-    road = PhantomRoad(real_road, [probe, *phantoms])
+    road = PhantomRoad(real_road, [probe, *phantoms], known)
     if real_road.network.get_lane(probe.target_lane_index).after_end(probe.position):
         road.np_random = copy.deepcopy(real_road.np_random)  # next_lane may be handed the generator: never draw from it
     probe.road = road
@@ -66,6 +71,8 @@ def plan(ego: IDMVehicle, phantoms: list, real_road: Road) -> EgoPlan:
         lane_change=int(target[2] - lane[2]) if target[:2] == lane[:2] else 0,
         leader=-1 if leader is None else int(getattr(leader, "ident", -1)),
         read=frozenset(int(getattr(v, "ident", -1)) for v in road.read if v is not probe),
+        lane=lane,
+        searches=road.searches,
     )
 
 

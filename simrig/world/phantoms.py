@@ -89,9 +89,14 @@ class PhantomRoad(Road):
     ahead of the ego, the rear the nearest behind); ``read`` collects every vehicle a search returned: the vehicles
     the plan depended on. Within one query nothing moves, so each (vehicle, lane) search is done once and its answer
     reused: MOBIL searches the ego's own lane again for every side lane, and IDM once more. (A numpy search gave the
-    same answers but was no faster at the ≤ 50 m of vehicles a plan sees: ``reports/perf/planner.md``.)"""
+    same answers but was no faster at the ≤ 50 m of vehicles a plan sees: ``reports/perf/planner.md``.)
 
-    def __init__(self, real: Road, vehicles: list):
+    ``searches`` records the planning ego's (``vehicles[0]``) answers by lane index: (front, rear). ``known`` gives
+    such answers up front, from a query on a list these vehicles are a subset of: an answer that does not hold a
+    vehicle removed since is still the nearest front and rear (highway-env's ties go to the same one), so it is not
+    searched again."""
+
+    def __init__(self, real: Road, vehicles: list, known: dict | None = None):
         self.network = real.network
         self.vehicles = vehicles
         self.objects = [o for o in real.objects if not isinstance(o, Landmark)]
@@ -99,12 +104,21 @@ class PhantomRoad(Road):
         self.record_history = False
         self.neighbour_vehicles_connected_lanes = real.neighbour_vehicles_connected_lanes
         self.read: list = []
+        self.searches: dict = {}
+        self._known = known or {}
         self._searched: dict = {}
 
     def neighbour_vehicles(self, vehicle, lane_index=None) -> tuple:
-        key = (id(vehicle), lane_index or vehicle.lane_index)
+        lane = lane_index or vehicle.lane_index
+        key = (id(vehicle), lane)
         found = self._searched.get(key)
         if found is None:
-            found = self._searched[key] = Road.neighbour_vehicles(self, vehicle, lane_index)
+            planning_ego = vehicle is self.vehicles[0]
+            found = self._known.get(lane) if planning_ego else None
+            if found is None:
+                found = Road.neighbour_vehicles(self, vehicle, lane_index)
+            self._searched[key] = found
+            if planning_ego:
+                self.searches[lane] = found
             self.read.extend(v for v in found if v is not None)
         return found

@@ -3,10 +3,11 @@
     python tests/perf/planner.py
 
 1. **Open loop, per frame**: :func:`simrig.scoring.planner.planner_scores` on ``highway_surround6`` (40 vehicles,
-   200 frames) and ``cut_in`` with ``saga``'s tracks: for the first tracker on a dataset (two planner queries a
-   frame, on the ground truth and on the tracks, plus the weighing of the misses the ground-truth plan reads) and
-   for a further tracker on it (the plans on the ground truth kept: one query a frame); target ≤ 1 ms per frame. Side
-   by side, the whole ``score`` with and without the planner, 3 alternating repeats.
+   200 frames) and ``cut_in`` with ``saga``'s tracks, the ground truth's plans read from the dataset's
+   ``truth_plans`` table (one query a frame, on the tracks; target ≤ 1 ms per frame); beside it, a dataset without
+   the table (its plans computed first: a query on the ground truth and one per vehicle it reads), what recording
+   the table adds to ``generate`` and what ``generate`` costs in all, and the whole ``score`` with and without the
+   planner; 3 repeats, each on a fresh generation.
 2. **Closed loop**: ``simrig drive`` (one tracker drive) against generating the same scenario and tracking it
    separately, 3 alternating repeats; target ≤ 1.5×.
 
@@ -32,6 +33,7 @@ from simrig.pipeline.generate import generate
 from simrig.pipeline.track import run_tracker
 from simrig.scoring import score
 from simrig.scoring.planner import planner_road_of, planner_scores
+from simrig.scoring.truth_plans import computed_truth_side, truth_side_of
 
 OUT = Path(__file__).resolve().parents[2] / "reports" / "perf" / "planner.md"
 REPEATS = 3
@@ -46,25 +48,27 @@ def _misses(report) -> np.ndarray:
 
 def open_loop(work: Path) -> list[str]:
     lines = ["## Open loop: the planner per frame", "",
-             "| scene | frames | first tracker on a dataset [ms/frame] | a further tracker (plans on the ground "
-             "truth kept) [ms/frame] | score() without the planner [s] | with it [s] | with / without |",
-             "|---|---|---|---|---|---|---|"]
+             "| scene | frames | scoring a tracker, plans on the ground truth recorded [ms/frame] | a dataset without "
+             "them, its first tracker [ms/frame] | recording them in `generate` [ms/frame] | `generate` in all "
+             "[ms/frame] | score() without the planner [s] | with it [s] | with / without |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for name in SCENES:
-        dataset_path = work / name
-        generate(load_scenario(name), seed=0, out=dataset_path)
-        dataset = Dataset.open(dataset_path)
-        tracks = run_tracker(dataset, "saga").tracks
-        report = score(dataset, tracks)
-        truth, road, misses = dataset.ground_truth, planner_road_of(dataset), _misses(report)
-        key = dataset.identity["ground_truth_sha256"]
-        timings = {"cold": [], "warm": [], "score": [], "score_without": []}
+        timings = {"recorded": [], "computed": [], "record": [], "generate": [], "score": [], "score_without": []}
         for repeat in range(REPEATS):
+            dataset_path = work / f"{name}{repeat}"
+            result = generate(load_scenario(name), seed=0, out=dataset_path)
+            timings["record"].append(result.times.planning)
+            timings["generate"].append(result.times.total)
+            dataset = Dataset.open(dataset_path)
+            tracks = run_tracker(dataset, "saga").tracks
+            misses = _misses(score(dataset, tracks, planner=False))
+            truth, road = dataset.ground_truth, planner_road_of(dataset)
             start = time.perf_counter()
-            planner_scores(road, truth, tracks.tracks3d, misses, f"{key}-{repeat}")  # a key never seen: cold
-            timings["cold"].append(time.perf_counter() - start)
+            planner_scores(road, truth, tracks.tracks3d, misses, truth_side_of(dataset, road, truth))
+            timings["recorded"].append(time.perf_counter() - start)
             start = time.perf_counter()
-            planner_scores(road, truth, tracks.tracks3d, misses, f"{key}-{repeat}")  # the same key again: warm
-            timings["warm"].append(time.perf_counter() - start)
+            planner_scores(road, truth, tracks.tracks3d, misses, computed_truth_side(road, truth))
+            timings["computed"].append(time.perf_counter() - start)
             start = time.perf_counter()
             score(dataset, tracks)
             timings["score"].append(time.perf_counter() - start)
@@ -73,8 +77,9 @@ def open_loop(work: Path) -> list[str]:
             timings["score_without"].append(time.perf_counter() - start)
         frames = len(truth.frames)
         median = {kind: statistics.median(values) for kind, values in timings.items()}
-        lines.append(f"| {name} | {frames} | {median['cold'] / frames * 1e3:.2f} | "
-                     f"{median['warm'] / frames * 1e3:.2f} | {median['score_without']:.2f} | "
+        per_frame = {kind: median[kind] / frames * 1e3 for kind in ("recorded", "computed", "record", "generate")}
+        lines.append(f"| {name} | {frames} | {per_frame['recorded']:.2f} | {per_frame['computed']:.2f} | "
+                     f"{per_frame['record']:.2f} | {per_frame['generate']:.1f} | {median['score_without']:.2f} | "
                      f"{median['score']:.2f} | {median['score'] / median['score_without']:.2f}× |")
     return lines
 
