@@ -860,6 +860,8 @@ def main(argv: list[str] | None = None) -> int:
             if isinstance(error, (SimrigError, ScenarioError)):
                 print(f"simrig: error: {_one_line(str(error))}", file=sys.stderr)
                 return 2
+            if isinstance(error, BrokenPipeError):  # the reader left early: console() leaves quietly
+                raise
             if isinstance(error, OSError):  # the file system said no: a read-only folder, a name too long, ...
                 where = f": {_shortened(error.filename)}" if error.filename else ""
                 print(f"simrig: error: {error.strerror or error}{where}", file=sys.stderr)

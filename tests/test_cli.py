@@ -160,6 +160,7 @@ def test_a_reader_that_leaves_early_is_not_a_traceback(tmp_path):
         run = subprocess.run(f"{sys.executable} -m simrig.cli {command} | head -c 5", shell=True, capture_output=True,
                              text=True, timeout=120, cwd=tmp_path)
         assert len(run.stdout) == 5 and "Traceback" not in run.stderr and "BrokenPipe" not in run.stderr, run.stderr
+        assert "Broken pipe" not in run.stderr, run.stderr  # `simrig scenarios | grep -q X` printed an error line
 
 
 def test_a_file_given_as_a_dataset_is_called_a_file(tmp_path, capsys):
