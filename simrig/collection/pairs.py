@@ -16,6 +16,7 @@ another order than the table's.
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -24,6 +25,7 @@ import numpy as np
 from simrig.trackers.assignment import hungarian
 from simrig.trackers.association_features import DETECTION_PAIR_FEATURES, TRACK_FEATURES, detection_pair_features
 from simrig.trackers.detections import DetectionArrays
+from simrig.trackers.global_hungarian import global_hungarian
 from simrig.trackers.learned import AppearanceKalmanTracker
 from simrig.trackers.settings import kalman_tracker_parts
 
@@ -120,10 +122,14 @@ class _Recorder(AppearanceKalmanTracker):
         self.identity[track.track_id] = int(self.actors[source])
 
 
+_TEACHER_SETTINGS = ("cost", "gate", "life", "min_hits", "max_age_s", "measurement_variance", "score_threshold")
+
+
 def teacher(prefilter_m: float = PREFILTER_M) -> _Recorder:
-    """The reference tracker whose decisions are recorded (``global_hungarian``'s defaults)."""
-    parts = kalman_tracker_parts(cost="mahalanobis", gate=None, life="hits", min_hits=1, max_age_s=1.0,
-                                 measurement_variance=1.0, score_threshold=0.0)
+    """The reference tracker whose decisions are recorded: ``global_hungarian``'s filter, life rule, gate and
+    Hungarian assignment at its defaults (read from its signature, so that the two cannot drift apart)."""
+    defaults = inspect.signature(global_hungarian).parameters
+    parts = kalman_tracker_parts(**{name: defaults[name].default for name in _TEACHER_SETTINGS})
     return _Recorder(prefilter_m, **parts, assign=hungarian)
 
 
