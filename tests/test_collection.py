@@ -3,6 +3,7 @@
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -101,6 +102,26 @@ def test_a_rerun_keeps_every_finished_sequence_and_another_collection_in_the_fol
         generate_collection(space, count=5, out=tmp_path / "c", seed=1, workers=1)
     with pytest.raises(SearchError, match=r"its seed differs"):
         generate_collection(space, count=4, out=tmp_path / "c", seed=2, workers=1)
+
+
+@pytest.mark.parametrize("planted", ["shards", "shards/0000", "shards/0000/000001"])
+def test_a_link_planted_in_a_collection_folder_is_refused_and_nothing_is_written_through_it(planted, tmp_path):
+    """A collection folder is data: a symbolic link planted in it (to a folder of the user's) must not carry a
+    resumed run's writes elsewhere."""
+    from simrig.dataset.outputs import OutputPathError
+
+    space = _space(tmp_path)
+    first = generate_collection(space, count=2, out=tmp_path / "c", seed=1, workers=1)
+    elsewhere = tmp_path / "elsewhere"
+    shutil.move(first.out / planted, elsewhere)
+    shutil.rmtree(elsewhere / "0000" / "000001" if planted == "shards" else
+                  elsewhere / "000001" if planted == "shards/0000" else elsewhere)
+    elsewhere.mkdir(exist_ok=True)
+    before = _files(elsewhere)
+    (first.out / planted).symlink_to(elsewhere, target_is_directory=True)
+    with pytest.raises(OutputPathError, match=rf"collection folder .*: {planted} is a symbolic link"):
+        generate_collection(space, count=2, out=first.out, seed=1, workers=1)
+    assert _files(elsewhere) == before
 
 
 def _run_until_killed(command: list[str], out: Path, finished: int) -> None:

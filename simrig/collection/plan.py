@@ -13,6 +13,7 @@ from pathlib import Path
 from simrig.scenarios import Scenario
 
 from ..dataset import Dataset
+from ..dataset.outputs import check_no_links
 from ..errors import DatasetError
 from ..pipeline.generate import generate
 from ..search.space import Candidate
@@ -45,6 +46,7 @@ def sequence_folder(index: int, shard_size: int) -> tuple[int, str]:
 def make_sequence(task: SequenceTask) -> tuple[dict, bool]:
     """Make the dataset of ``task`` unless its folder already holds it (the same scenario and seed); its counts for
     the index (:func:`~simrig.collection.index.sequence_counts`) and whether it was made now."""
+    check_no_links(Path(task.root), task.folder, what="collection folder")
     out = Path(task.root) / task.folder
     dataset = _finished(out, task)
     made = dataset is None

@@ -28,7 +28,7 @@ from ..benchmark.engine_names import ENGINES
 from ..benchmark.engines import Interrupted, local_map, machine_workers, ray_map, require_ray
 from ..benchmark.results import write_table_atomic
 from ..dataset.manifest import write_json_atomic
-from ..dataset.outputs import check_output_path, check_own_folder, folder_lock
+from ..dataset.outputs import check_no_links, check_output_path, check_own_folder, folder_lock
 from ..pipeline.generate import check_generable
 from ..reading import read_capped
 from ..search.space import SearchError
@@ -96,6 +96,8 @@ def generate_collection(space: str | Path | GenerationSpace, *, count: int, out:
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out, "simrig generate --space"):
         _check_same_collection(out, description)
+        for task in tasks:  # before any work; make_sequence checks its own folder again as it writes
+            check_no_links(out, task.folder, what="collection folder")
         (out / INDEX_FILE).unlink(missing_ok=True)  # from here until the end, the folder must not look finished
         write_json_atomic(out / COLLECTION_FILE, {**description, "complete": False})
         rows, kept = _make(tasks, out, engine, workers, address, progress, space.config.name)

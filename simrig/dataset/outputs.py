@@ -104,6 +104,18 @@ def check_own_folder(out: Path, *, what: str, marker: str, made: Iterable[str] =
                           f"or empty folder or one it made; choose another --out")
 
 
+def check_no_links(root: Path, relative: str | Path, *, what: str) -> None:
+    """Refuse to write at ``root / relative`` when ``relative`` passes through a symbolic link (each of its folders
+    and itself, ``root`` excepted: the user named it): a link planted in a folder simrig made would carry the write
+    elsewhere. ``what`` names ``root`` in the message."""
+    path = root
+    for part in Path(relative).parts:
+        path = path / part
+        if path.is_symlink():
+            raise OutputPathError(f"{what} {str(root)!r}: {path.relative_to(root)} is a symbolic link; simrig writes "
+                                  "nothing through a link in a folder it made: remove the link")
+
+
 def _is_marker(path: Path, keys: tuple[str, ...]) -> bool:
     """Whether ``path`` is a marker simrig wrote: any entry when no ``keys`` are asked for, else a regular JSON
     file holding an object with every key."""
