@@ -29,7 +29,7 @@ SUITES_DIR = CATALOG_DIR / "suites"
 DEFAULT_SCENARIO = "highway_surround6"
 _NAMED_MESSAGE = re.compile(r"^([a-z_][a-z0-9_]*(?:\.[A-Za-z0-9_]+)*(?:, [a-z_][a-z0-9_]*)*): (.*)$")
 
-__all__ = ["CATALOG_DIR", "DEFAULT_SCENARIO", "SUITES_DIR", "Scenario", "ScenarioError", "catalog",
+__all__ = ["CATALOG_DIR", "DEFAULT_SCENARIO", "SUITES_DIR", "Scenario", "ScenarioError", "catalog", "dimension_labels",
            "describe_errors", "load_scenario", "suite_catalog"]
 
 
@@ -102,13 +102,17 @@ MAX_ERRORS_LISTED = 10
 """Validation errors named in one message; the rest are counted."""
 
 
-def describe_errors(error: ValidationError) -> str:
+def describe_errors(error: ValidationError, labels: dict[tuple, str] | None = None) -> str:
     """One line per pydantic error folded into one line: 'key.path: message' (the first
-    :data:`MAX_ERRORS_LISTED`, then how many more)."""
+    :data:`MAX_ERRORS_LISTED`, then how many more). ``labels`` name a key's leading parts in full (a space's
+    ``("dimensions", 0)`` as ``dimensions.0 (traffic.vehicles)``: :func:`dimension_labels`)."""
     parts = []
     items = error.errors()
     for item in items[:MAX_ERRORS_LISTED]:
-        key = ".".join(str(part) for part in item["loc"]) or "(top level)"
+        loc = tuple(item["loc"])
+        label = (labels or {}).get(loc[:2])
+        names = [label, *map(str, loc[2:])] if label else [str(part) for part in loc]
+        key = ".".join(names) or "(top level)"
         message = item["msg"]
         if item["type"] == "extra_forbidden":
             message = "unknown key"
@@ -122,6 +126,16 @@ def describe_errors(error: ValidationError) -> str:
     if len(items) > MAX_ERRORS_LISTED:
         parts.append(f"and {len(items) - MAX_ERRORS_LISTED:,} more")
     return "; ".join(parts)
+
+
+def dimension_labels(raw: dict) -> dict[tuple, str]:
+    """Each dimension of a raw space file named by its index and its path (for :func:`describe_errors`)."""
+    dimensions = raw.get("dimensions")
+    if not isinstance(dimensions, list):
+        return {}
+    return {("dimensions", index): f"dimensions.{index} ({dimension['path']})"
+            for index, dimension in enumerate(dimensions)
+            if isinstance(dimension, dict) and isinstance(dimension.get("path"), str) and len(dimension["path"]) < 80}
 
 
 def load_scenario(name_or_path: str | Path) -> Scenario:

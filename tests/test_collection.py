@@ -216,7 +216,8 @@ def test_a_choice_of_base_samples_road_types_and_checks_every_dimension_on_each(
 
 
 BAD_SPACES = {
-    "an empty range": ("low = 2\nhigh = 6", "low = 6\nhigh = 6", r"dimensions\.0\.high: .*range \[6, 6\] is empty"),
+    "an empty range": ("low = 2\nhigh = 6", "low = 6\nhigh = 6",
+                       r"dimensions\.0 \(traffic\.vehicles\)\.high: .*range \[6, 6\] is empty"),
     "a setting that does not exist": ('path = "traffic.vehicles"', 'path = "traffic.vehicle_count"',
                                       r"dimensions\.0\.path \(traffic\.vehicle_count\)"),
     "weights that do not match the choices": ("weights = [0.75, 0.25]", "weights = [1.0]",

@@ -66,8 +66,10 @@ def test_a_window_value_is_start_to_start_plus_length_minus_one():
 @pytest.mark.parametrize(("change", "expected"), [
     (('path = "sensor.detection.probability"', 'path = "sensor.detection.nonsense"'),
      "dimensions.1.path (sensor.detection.nonsense): setting 'sensor.detection.nonsense'"),
-    (("low = 0.5\nhigh = 1.0", "low = 0.9\nhigh = 0.2"), "dimensions.1.high: the range [0.9, 0.2] is empty"),
-    (("length = [1, 10]", "length = [6, 3]"), "dimensions.0.length: the range [6, 3] is empty"),
+    (("low = 0.5\nhigh = 1.0", "low = 0.9\nhigh = 0.2"),
+     "dimensions.1 (sensor.detection.probability).high: the range [0.9, 0.2] is empty"),
+    (("length = [1, 10]", "length = [6, 3]"),
+     "dimensions.0 (perturbations.0.frames).length: the range [6, 3] is empty"),
     (("budget = 3", "budget = 0"), "budget: Input should be greater than or equal to 1"),
     (('metric = "2d_IDF1"', 'metric = "2d_FUN"'), "objective.metric: '2d_FUN' is not a metric the scorer reports"),
     (('metric = "3d_IDS"', 'metric = "IDs"'), "objective.failure.metric: 'IDs' is not a metric the scorer"),

@@ -16,7 +16,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from simrig.scenarios import Scenario, describe_errors
+from simrig.scenarios import Scenario, describe_errors, dimension_labels
 from simrig.scenarios.overrides import with_setting
 from simrig.scenarios.search_schema import BASE_PATH, SEARCH_ONLY_KEYS, Dimension, SpaceConfig
 
@@ -72,7 +72,7 @@ def load_generation_space(name_or_path: str | Path) -> GenerationSpace:
     try:
         config = SpaceConfig.model_validate(raw)
     except ValidationError as error:
-        raise SearchError(f"{where}: {describe_errors(error)}") from None
+        raise SearchError(f"{where}: {describe_errors(error, dimension_labels(raw))}") from None
     bases: dict[str, Scenario] = {}
     for name in _base_names(config):  # the file's base too: a candidate without a chosen base falls back to it
         named = where if name == config.base else f"{where}: base {name!r}"

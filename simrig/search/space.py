@@ -19,7 +19,7 @@ from simrig.benchmark.evaluate import METRIC_COLUMNS
 from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
 from simrig.reading import read_capped
-from simrig.scenarios import Scenario, ScenarioError, describe_errors, load_scenario
+from simrig.scenarios import Scenario, ScenarioError, describe_errors, dimension_labels, load_scenario
 from simrig.scenarios.files import catalog_entry_or_file
 from simrig.scenarios.overrides import get_setting, with_setting
 from simrig.scenarios.search_schema import BASE_PATH, Dimension, SearchSpaceConfig, SpaceConfig, space_catalog
@@ -118,7 +118,7 @@ def load_space(name_or_path: str | Path, *, tracker: str | None = None, params: 
     try:
         config = SearchSpaceConfig.model_validate(raw)
     except ValidationError as error:
-        raise SearchError(f"{where}: {describe_errors(error)}") from None
+        raise SearchError(f"{where}: {describe_errors(error, dimension_labels(raw))}") from None
     if tracker is None:  # the space file's own tracker: data, so no module:attribute unless trusted
         try:
             check_file_reference(file_tracker, trusted=trust_file, where=where)
