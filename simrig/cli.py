@@ -381,6 +381,9 @@ def _register_score(commands) -> None:
     scorer.add_argument("--interpolation", choices=("devkit", "corrected", "none"), default="devkit",
                         help="fill the gaps inside 3D tracks before the AMOTA family: devkit (default: the nuScenes "
                              "devkit 1.2.0 as shipped, its inverted weights included), corrected (linear) or none")
+    scorer.add_argument("--no-planner", dest="planner", action="store_false",
+                        help="do not ask the ego's planner: the planner-aware scores and each miss's consequence are "
+                             "left out (reported as not asked)")
     scorer.set_defaults(run=_cmd_score)
 
 
@@ -392,7 +395,8 @@ def _cmd_score(args: argparse.Namespace) -> int:
     for option in ("json", "errors"):
         _output(getattr(args, option), f"--{option}", inputs=(args.dataset, args.tracks), folder=False)
     report = score(args.dataset, args.tracks, lookback_s=args.lookback, camera=args.camera,
-                   evaluation=evaluation_overrides(args.evaluation), fmt=args.format, interpolation=args.interpolation)
+                   evaluation=evaluation_overrides(args.evaluation), fmt=args.format, interpolation=args.interpolation,
+                   planner=args.planner)
     print(report.table())
     if args.json is not None:
         args.json.parent.mkdir(parents=True, exist_ok=True)

@@ -96,8 +96,15 @@ def test_track_then_score_a_dataset(small_dataset, tmp_path, capsys):
                  "--out", str(out)]) == 0
     assert "tracked   30 frames with global_hungarian" in capsys.readouterr().out
     assert (out / "tracks3d.parquet").exists()
-    assert main(["score", str(small_dataset.path), str(out)]) == 0
-    assert "AMOTA" in capsys.readouterr().out
+    assert main(["score", str(small_dataset.path), str(out), "--json", str(tmp_path / "asked.json")]) == 0
+    printed = capsys.readouterr().out
+    assert "AMOTA" in printed and "Planner-aware" in printed
+    assert main(["score", str(small_dataset.path), str(out), "--no-planner",
+                 "--json", str(tmp_path / "not.json")]) == 0
+    assert "Planner-aware: not asked" in capsys.readouterr().out
+    asked, not_asked = (json.loads((tmp_path / name).read_text()) for name in ("asked.json", "not.json"))
+    assert asked["3d"]["planner"] == {"scored": True} and asked["3d"]["overall"]["PKL"] >= 0
+    assert not_asked["3d"]["planner"] == {"scored": False, "note": "not asked"}
 
 
 def test_track_with_a_bad_tracker_or_parameter_is_one_line(small_dataset, tmp_path, capsys):
