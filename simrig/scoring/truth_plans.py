@@ -26,7 +26,6 @@ import pyarrow as pa
 
 from simrig.dataset import Dataset
 from simrig.dataset.ground_truth import GroundTruth
-from simrig.dataset.tables import TRUTH_PLANS
 from simrig.errors import DatasetError
 from simrig.types import EgoPose
 
@@ -57,8 +56,8 @@ class TruthPlanner:
         consequence = {}
         for actor in sorted(on_truth.read):
             holding = [lane for lane, found in on_truth.searches.items() if actor in _idents(found)]
-            if (ego.POLITENESS == 0 and holding == [on_truth.lane]
-                    and _idents(on_truth.searches[on_truth.lane][:1]) != [actor]):
+            ego_lane_follower = holding == [on_truth.lane] and _idents(on_truth.searches[on_truth.lane][1:]) == [actor]
+            if ego.POLITENESS == 0 and ego_lane_follower:
                 consequence[actor] = 0.0  # the ego lane's follower only: read by the politeness term alone
                 continue
             known = {lane: found for lane, found in on_truth.searches.items() if lane not in holding}
@@ -143,4 +142,4 @@ def truth_side_of(dataset: Dataset, road: PlanningRoad, truth: GroundTruth, key:
     return computed
 
 
-__all__ = ["TRUTH_PLANS", "TruthPlanner", "computed_truth_side", "in_range", "recorded_truth_side", "truth_side_of"]
+__all__ = ["TruthPlanner", "computed_truth_side", "in_range", "recorded_truth_side", "truth_side_of"]
