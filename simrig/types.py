@@ -227,6 +227,29 @@ class CameraGroundTruth:
             object.__setattr__(self, name, _readonly(getattr(self, name), dtype, (), name))
 
 
+EGO_ID = -1
+"""The actor id that stands for the ego in a collision (the ego has no actor id of its own)."""
+OBSTACLE_ID = -2
+"""The actor id that stands for a fixed obstacle of the road (the end of a ramp's acceleration lane) in a collision."""
+
+
+@dataclass(frozen=True, slots=True)
+class Collision:
+    """Two road users whose footprints met during a frame (:mod:`simrig.world.collisions`).
+
+    first, second: actor ids, ``first <= second`` (:data:`EGO_ID` the ego, :data:`OBSTACLE_ID` a fixed obstacle);
+    closing_speed [m/s]: how fast their centres approached each other at the step they met; geometry: their
+    footprints touch or overlap (the verdict); highway_env: highway-env flagged both crashed at that step (recorded
+    beside it: the two should always agree; a row where one says no, with ``first == second``, is a vehicle
+    highway-env flagged without touching anything)."""
+
+    first: int
+    second: int
+    closing_speed: float
+    geometry: bool = True
+    highway_env: bool = True
+
+
 @dataclass(frozen=True, eq=False)
 class GroundTruthFrame:
     """Everything true at one time step (never given to a tracker).
@@ -234,7 +257,8 @@ class GroundTruthFrame:
     frame: index from 0; timestamp [s]; ego: the ego pose; actor_ids: ``(N,)`` int64 ids, unique and
     stable for an actor's lifetime; classes: ``(N,)`` class names (:class:`ActorClass` values);
     boxes: ``(N, 9)`` world-frame boxes in :data:`BOX3D_FIELDS` order; cameras: per camera name, the
-    actors' projections; events: the perturbation events active at this frame (for cause attribution).
+    actors' projections; events: the perturbation events active at this frame (for cause attribution);
+    collisions: the collisions that happened during the step to this frame.
     """
 
     frame: int
@@ -245,6 +269,7 @@ class GroundTruthFrame:
     boxes: np.ndarray
     cameras: Mapping[str, CameraGroundTruth] = field(default_factory=dict)
     events: tuple[str, ...] = ()
+    collisions: tuple[Collision, ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "actor_ids", _readonly(self.actor_ids, np.int64, (), "actor_ids"))

@@ -120,7 +120,7 @@ def test_outcome_by_hand():
         return [x, y, spec.height / 2, spec.length, spec.width, spec.height, 0.0, speed, 0.0]
 
     truth = SimpleNamespace(
-        frames=np.array([0, 1]), timestamps=np.array([0.0, 0.1]), events=((), ()),
+        frames=np.array([0, 1]), timestamps=np.array([0.0, 0.1]), events=((), ()), collisions=(),
         egos=(EgoPose(0.0, 0.0, 0.0, 0.0, 20.0, 0.0), EgoPose(2.0, 0.0, 0.0, 0.0, 19.5, 0.0)),
         frame=np.array([0, 0, 1]),
         boxes=np.array([box(30.0, 0.0, car, 10.0), box(0.0, 4.0, truck, 0.0), box(31.0, 0.0, car, 10.0)]),

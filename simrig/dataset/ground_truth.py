@@ -21,7 +21,7 @@ from ..causes import CAUSE_BITS, CAUSE_NAMES, Cause
 from ..errors import DatasetError
 from ..geometry import project_boxes_at
 from ..sensor.capture import as_estimated
-from ..types import BOX2D_FIELDS, BOX3D_FIELDS, EgoPose, Rig
+from ..types import BOX2D_FIELDS, BOX3D_FIELDS, EGO_ID, Collision, EgoPose, Rig
 from .arrow_columns import shared_strings, string_codes
 from .tables import SCHEMAS
 from .tracks_file import TrackRows
@@ -50,7 +50,10 @@ class GroundTruth:
     minus its frame's tick (NaN where the camera took no image), when the scenario sets capture timing (each
     camera's 2D ground truth is at its capture time; the 3D ground truth at the tick), else ``None``. given_egos:
     the ego pose the tracker was given per frame when the scenario sets an ego-pose error (``egos`` keeps the
-    true one), else ``None``.
+    true one), else ``None``. collisions: ``(frame, Collision)`` in the order of the ``collisions`` table; a
+    dataset made before collisions were recorded gives its manifest's ``ego_crashed`` events instead, as
+    ``Collision(EGO_ID, EGO_ID, nan, geometry=False, highway_env=True)`` (highway-env's flag; the other party was
+    not recorded).
 
     What exists only where the actor is in view is held for those ``V`` (row, camera) pairs alone, in
     row-major order (that of ``np.nonzero(in_view)``, the tables' own; a long run has most actors out of most
@@ -82,6 +85,7 @@ class GroundTruth:
     causes_known: bool = True
     capture_offsets: np.ndarray | None = None
     given_egos: tuple[EgoPose, ...] | None = None
+    collisions: tuple[tuple[int, Collision], ...] = ()
 
     def view_index(self, rows: np.ndarray, camera: int) -> np.ndarray:
         """Index into the ``view_*`` arrays of each of ``rows`` in camera ``camera`` (rig order); a ``KeyError``
@@ -326,6 +330,7 @@ def load_ground_truth(dataset: Dataset) -> GroundTruth:
         causes_known=dataset.causes_known,
         capture_offsets=_capture_offsets(dataset, ego.column("timestamp").to_numpy(), c),
         given_egos=_given_egos(dataset, len(frames)),
+        collisions=_collisions(dataset),
     )
     camera_of = {name: i for i, name in enumerate(cameras)}
     for sensor in dataset.batches("sensor_truth", ["frame", "camera", "actor_id", "detection", "causes"]):
@@ -352,6 +357,19 @@ def _capture_offsets(dataset: Dataset, timestamps: np.ndarray, cameras: int) -> 
         raise DatasetError(f"dataset {str(dataset.path)!r}: captures holds {len(times)} rows, not one per frame "
                            f"and camera ({len(timestamps)} × {cameras})")
     return times.reshape(len(timestamps), cameras) - timestamps[:, None]
+
+
+def _collisions(dataset: Dataset) -> tuple[tuple[int, Collision], ...]:
+    """The ``collisions`` table's rows as ``(frame, Collision)``; for a dataset without one, its manifest's
+    ``ego_crashed`` events (:class:`GroundTruth`)."""
+    if not dataset.has_table("collisions"):
+        return tuple((int(event["frame"]), Collision(EGO_ID, EGO_ID, float("nan"), geometry=False, highway_env=True))
+                     for event in dataset.manifest.get("events", []) if event.get("event") == "ego_crashed")
+    table = dataset.columns("collisions")
+    columns = [table.column(name).to_pylist() for name in
+               ("frame", "first", "second", "closing_speed", "geometry", "highway_env")]
+    return tuple((int(frame), Collision(int(first), int(second), float(speed), bool(geometry), bool(flag)))
+                 for frame, first, second, speed, geometry, flag in zip(*columns, strict=True))
 
 
 def _given_egos(dataset: Dataset, frames: int) -> tuple[EgoPose, ...] | None:

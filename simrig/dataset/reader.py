@@ -317,6 +317,9 @@ class Dataset:
         :attr:`ground_truth`."""
         truth = self.ground_truth
         boxes2d, truncation, occlusion, depth = truth.boxes2d, truth.truncation, truth.occlusion, load_depth(self)
+        collisions: dict[int, list] = {}
+        for frame, collision in truth.collisions:
+            collisions.setdefault(frame, []).append(collision)
         for position, frame in enumerate(truth.frames):
             rows = truth.frame_rows(position)
             per_camera = {
@@ -338,6 +341,7 @@ class Dataset:
                 boxes=truth.boxes[rows],
                 cameras=per_camera,
                 events=truth.events[position],
+                collisions=tuple(collisions.get(int(frame), ())),
             )
 
     @property

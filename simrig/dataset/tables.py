@@ -26,6 +26,13 @@ Written by every generation since the planner-aware scores (datasets made before
 ``truth_plans``   one row per frame: what the ego's planner commands on the ground truth within the class ranges
                   (:mod:`simrig.scoring.truth_plans`), and the consequence of missing each vehicle it reads.
 
+Written by every generation since collisions are found from geometry (datasets made before, and imported ones,
+lack it; their ego crashes are the manifest's ``ego_crashed`` events):
+
+``collisions``    one row per collision (:class:`~simrig.types.Collision`): the frame whose step it happened in,
+                  the two actor ids (−1: the ego, −2: a fixed obstacle), the closing speed, and the two verdicts
+                  (footprints touching; highway-env's crash flag).
+
 Rows are sorted by frame; within a frame as described per table, exactly as written.
 """
 
@@ -37,7 +44,7 @@ import pyarrow as pa
 from ..causes import CAUSE_BITS, CAUSE_NAMES
 from ..render.visibility import Visibility
 from ..sensor.model import SensorOutput
-from ..types import BOX2D_FIELDS, BOX3D_FIELDS, GroundTruthFrame
+from ..types import BOX2D_FIELDS, BOX3D_FIELDS, Collision, GroundTruthFrame
 
 _F64 = pa.float64()
 
@@ -100,10 +107,17 @@ TRUTH_PLANS = pa.schema(
     metadata={"lane_change": "-1 left, 0 keep, +1 right", "leader": "actor id followed (-1: free road)",
               "read": "actor ids the plan read, ascending", "consequence": "KL(plan || plan without that actor)"},
 )
+COLLISIONS = pa.schema(
+    [pa.field("frame", pa.int32()), pa.field("first", pa.int64()), pa.field("second", pa.int64()),
+     pa.field("closing_speed", _F64, metadata={"unit": "m/s"}), pa.field("geometry", pa.bool_()),
+     pa.field("highway_env", pa.bool_())],
+    metadata={"first": "actor id, -1 the ego, -2 a fixed obstacle; first <= second",
+              "geometry": "footprints touch or overlap (the verdict)", "highway_env": "highway-env's crash flag"},
+)
 OPTIONAL_SCHEMAS: dict[str, pa.Schema] = {"captures": CAPTURES, "ego_estimates": EGO_ESTIMATES,
-                                          "truth_plans": TRUTH_PLANS}
-"""Tables a dataset may lack: ``captures`` and ``ego_estimates`` (capture timing only), ``truth_plans`` (imported
-datasets, and those generated before it was recorded)."""
+                                          "truth_plans": TRUTH_PLANS, "collisions": COLLISIONS}
+"""Tables a dataset may lack: ``captures`` and ``ego_estimates`` (capture timing only), ``truth_plans`` and
+``collisions`` (imported datasets, and those generated before they were recorded)."""
 SCHEMAS: dict[str, pa.Schema] = {
     "ego_poses": EGO_POSES,
     "ground_truth": GROUND_TRUTH,
@@ -172,6 +186,19 @@ def frame_columns(
         "visibility": visibility_columns,
         **_sensor_columns(state.frame, state.timestamp, sensor),
         **_timing_columns(state.frame, sensor, camera_names),
+        "collisions": collision_columns(state.frame, state.collisions),
+    }
+
+
+def collision_columns(frame: int, collisions: tuple[Collision, ...]) -> dict[str, np.ndarray]:
+    """The ``collisions`` rows of one frame (usually none)."""
+    return {
+        "frame": np.full(len(collisions), frame, dtype=np.int32),
+        "first": np.array([c.first for c in collisions], dtype=np.int64),
+        "second": np.array([c.second for c in collisions], dtype=np.int64),
+        "closing_speed": np.array([c.closing_speed for c in collisions], dtype=float),
+        "geometry": np.array([c.geometry for c in collisions], dtype=bool),
+        "highway_env": np.array([c.highway_env for c in collisions], dtype=bool),
     }
 
 

@@ -45,7 +45,7 @@ from simrig.scenarios import Scenario
 from simrig.scenarios.timing_schema import timing_tables_set
 from simrig.scoring.drive_outcome import HARD_BRAKE_MPS2, NEAR_MISS_TTC_S, DriveOutcome, drive_outcome
 from simrig.scoring.inputs import class_ranges
-from simrig.types import GroundTruthFrame, SensorFrame, Track
+from simrig.types import OBSTACLE_ID, GroundTruthFrame, SensorFrame, Track
 
 GROUND_TRUTH = "ground truth"
 """The perception of the reference drive."""
@@ -258,15 +258,31 @@ def drive_report(out: Path) -> str:
              "The ego driven by its own planner (IDM + MOBIL) on each perception; `ground truth` is the reference "
              f"(the ground truth within the class ranges). Near miss: time to collision below {NEAR_MISS_TTC_S} s; "
              f"hard brake: deceleration above {HARD_BRAKE_MPS2} m/s² (frames where each starts).", "",
-             "| perception | collision (frame) | min TTC [s] (frame) | near misses (frames) | hard brakes (frames) "
-             "| progress [m] |", "|---|---|---|---|---|---|"]
+             "Collision: the ego's footprint touched another road user's (frame, who, closing speed); the ego and "
+             "what it hit then stand where they met, so progress ends there.", "",
+             "| perception | collision (frame, actor, closing speed) | min TTC [s] (frame) | near misses (frames) "
+             "| hard brakes (frames) | progress [m] |", "|---|---|---|---|---|---|"]
     for row in rows:
         ttc = "–" if row["min_ttc_s"] is None else f"{row['min_ttc_s']:.2f} ({row['min_ttc_frame']})"
-        collision = f"yes ({row['collision_frame']})" if row["collisions"] else "no"
-        lines.append(f"| {row['perception']} | {collision} | {ttc} | {_frames(row['near_misses'])} "
+        lines.append(f"| {row['perception']} | {collision_text(row)} | {ttc} | {_frames(row['near_misses'])} "
                      f"| {_frames(row['hard_brakes'])} | {row['progress_m']:.1f} |")
+    if rows[0]["perception"] == GROUND_TRUTH and rows[0]["collisions"]:
+        lines += ["", f"**The ground-truth drive itself collides** (frame {rows[0]['collision_frame']}): in this "
+                  "scenario and seed the ego's planner crashes on perfect perception, so a tracker's collision here "
+                  "is not the tracker's alone."]
     lines += ["", "Produced by:", ""] + [f"- `{row['command']}`" for row in rows[1:]]
     return "\n".join(lines) + "\n"
+
+
+def collision_text(row: dict) -> str:
+    """A drive outcome's collision as the report writes it: ``no``, or ``yes (frame F, actor A, S m/s)``."""
+    if not row["collisions"]:
+        return "no"
+    actor = row.get("collision_actor")
+    who = "" if actor is None else (", an obstacle" if actor == OBSTACLE_ID else f", actor {actor}")
+    speed = row.get("collision_speed_mps")
+    closing = "" if speed is None else f", {speed:.1f} m/s"
+    return f"yes (frame {row['collision_frame']}{who}{closing})"
 
 
 def _frames(frames: list[int]) -> str:

@@ -68,7 +68,8 @@ class RecordedWorld:
         recorded = next(self._states)
         state = GroundTruthFrame(frame=recorded.frame, timestamp=recorded.timestamp, ego=recorded.ego,
                                  actor_ids=recorded.actor_ids, classes=recorded.classes, boxes=recorded.boxes,
-                                 events=tuple(self._events.get(recorded.frame, ())))
+                                 events=tuple(self._events.get(recorded.frame, ())),
+                                 collisions=recorded.collisions)
         times.traffic += time.perf_counter() - tick
         tick = time.perf_counter()
         projection = project_boxes(state.boxes, self.rig, state.ego)

@@ -1,8 +1,12 @@
 """How a drive went (closed loop, ``simrig drive``): collisions, time to collision, hard braking and progress, from
 the ground truth of the driven world.
 
-* ``collisions``: the ego's crashes (the ``ego_crashed`` events highway-env reported; after a crash highway-env
-  holds the ego still for good, so a drive has at most one).
+* ``collisions``: the ego's collisions — its footprint touching another road user's at the end of a simulation step
+  (the dataset's ``collisions`` table, :mod:`simrig.world.collisions`). The ego and what it hit then stand where
+  they met, so the progress ends there, and a later collision is something else running into them.
+  ``collision_frame``, ``collision_actor`` (−2: a fixed obstacle) and ``collision_speed_mps`` (how fast the two
+  closed) describe the first. A dataset made before collisions were recorded gives highway-env's ``ego_crashed``
+  events (its flag, no other party, no speed).
 * ``min_ttc_s`` [s]: the least time to collision with any vehicle ahead in the ego's path — a vehicle whose
   footprint overlaps the ego's sideways (centres closer across the ego's heading than the two half widths) and
   whose rear is ahead of the ego's front: bumper gap / closing speed along the ego's heading, where closing. Frames
@@ -22,7 +26,7 @@ import numpy as np
 
 from simrig.classes import CLASS_SPECS
 from simrig.dataset.ground_truth import GroundTruth
-from simrig.types import ActorClass
+from simrig.types import EGO_ID, ActorClass
 
 NEAR_MISS_TTC_S = 1.5
 """[s] a time to collision below this is a near miss (a common threshold for a critical conflict in traffic-
@@ -46,6 +50,8 @@ class DriveOutcome:
     frames: int
     collisions: int
     collision_frame: int | None
+    collision_actor: int | None
+    collision_speed_mps: float | None
     min_ttc_s: float
     min_ttc_frame: int | None
     near_misses: tuple[int, ...]
@@ -59,8 +65,12 @@ class DriveOutcome:
 
 def drive_outcome(truth: GroundTruth) -> DriveOutcome:
     """The outcome of the drive whose ground truth is ``truth`` (module docstring)."""
-    crashes = [int(frame) for frame, events in zip(truth.frames, truth.events, strict=True) if "ego_crashed" in events]
-    collision = crashes[0] if crashes else None
+    crashes = [(frame, c) for frame, c in truth.collisions if EGO_ID in (c.first, c.second)]
+    collision, actor, closing_speed = None, None, None
+    if crashes:
+        collision, first = crashes[0]
+        actor = None if first.first == first.second else first.first + first.second - EGO_ID
+        closing_speed = float(first.closing_speed) if np.isfinite(first.closing_speed) else None
     ego = np.array([(e.x, e.y, e.yaw, e.vx, e.vy) for e in truth.egos]).reshape(-1, 5)
     ttc = np.full(len(truth.frames), np.inf)
     heading = np.stack([np.cos(ego[:, 2]), np.sin(ego[:, 2])], axis=1)
@@ -83,6 +93,7 @@ def drive_outcome(truth: GroundTruth) -> DriveOutcome:
     best = int(np.argmin(ttc_scored)) if len(ttc_scored) else 0
     return DriveOutcome(
         frames=len(truth.frames), collisions=len(crashes), collision_frame=collision,
+        collision_actor=actor, collision_speed_mps=closing_speed,
         min_ttc_s=float(ttc_scored[best]) if len(ttc_scored) else float("inf"),
         min_ttc_frame=int(truth.frames[best]) if len(ttc_scored) and np.isfinite(ttc_scored[best]) else None,
         near_misses=_onsets(truth.frames, ttc_scored < NEAR_MISS_TTC_S),

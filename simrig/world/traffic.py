@@ -5,6 +5,11 @@ What this module adds to highway-env (the README's "What simrig does with highwa
 * The ego drives itself (IDM + MOBIL, like every other vehicle), so no agent action ends an episode. The
   scenario always runs all its frames: a crash of the ego or the end of highway-env's episode is recorded
   as an event (``ego_crashed``, ``env_terminated``) and stepping goes on.
+* Collisions are found from geometry, after every simulation step: footprints that touch or overlap
+  (:mod:`simrig.world.collisions`, with highway-env's own crash flag recorded beside each one). Each frame's
+  ground truth lists the collisions of its step (``GroundTruthFrame.collisions``). The ego and whatever it
+  touched freeze: they stand where they met for the rest of the sequence (a drive's progress ends there; no car
+  it hit vanishes).
 * All traffic is simrig's: highway-env's own vehicles are removed at reset and intersection-v0's spawning
   is switched off. ``vehicles`` others are kept in a disc of ``window_radius_m`` around the ego: a vehicle
   leaving the disc is removed (a death), a new one appears on a random lane between
@@ -19,10 +24,10 @@ What this module adds to highway-env (the README's "What simrig does with highwa
   speeds are lowered until every vehicle, the ego included, can keep its gap (``_settle_initial_speeds``).
 * Crashes of other vehicles: highway-env brakes a crashed vehicle to a standstill and leaves it on the road
   for good, so its lane jams behind it and, after a few crashes, all traffic (the ego too) stands still.
-  Rule: a non-ego vehicle that crashes is recorded as a ``vehicle_crashed id=N`` event at the frame in
-  which highway-env reports the crash, and is removed from the road in that same frame (it is absent from
-  that frame's ground truth: its last box is the frame before, so no ground truth shows two vehicles
-  interpenetrating). A crashed scripted vehicle (occluder, cut-in) follows the same rule; its script ends.
+  Rule: two non-ego vehicles that collide are recorded as a collision of the frame (in the dataset's
+  ``collisions`` table) and as ``vehicle_crashed id=N`` events, and are removed from the road in that same
+  frame (they are absent from that frame's ground truth: their last boxes are the frame before). A crashed
+  scripted vehicle (occluder, cut-in) follows the same rule; its script ends.
 * On highway-v0 the ego is moved ``window_radius_m`` down the road so that the window behind it lies on
   the road (highway-env places it at the start, behind all traffic).
 * Ids come from a counter (highway-env has none; ``id()`` is reused after removal).
@@ -43,7 +48,8 @@ from simrig.scenarios.perturbation_schema import CutIn, LeadBrake, Occluder, Sta
 from simrig.scenarios.schema import TrafficConfig
 
 from ..road import RoadMarkings
-from ..types import ActorClass, EgoPose, GroundTruthFrame
+from ..types import EGO_ID, ActorClass, Collision, EgoPose, GroundTruthFrame
+from .collisions import CollisionWatch
 from .ego_planner import drive_on_perception
 from .layouts import LIMIT_MARGIN_MPS, build_layout, lane_samples
 from .phantoms import phantoms_from_boxes
@@ -141,6 +147,8 @@ class TrafficWorld:
         )
         road.vehicles = [self.ego]
         env.controlled_vehicles = [self.ego]
+        self._watch = CollisionWatch(self.ego)
+        self._watch_steps(road)
         if self._ego_on_perception:
             drive_on_perception(self.ego)
         if self._layout is None:
@@ -199,20 +207,21 @@ class TrafficWorld:
         """Advance one frame (1 / frame rate seconds) and keep the traffic window at its density."""
         if self.ego is None:
             raise RuntimeError("TrafficWorld.step() called before reset()")
-        was_crashed = self.ego.crashed
+        was_frozen = self.ego.frozen
         _, _, terminated, _, _ = self.env.step(None)
         self._frame += 1
+        collisions = self._watch.take_frame()
         events = []
-        if self.ego.crashed and not was_crashed:
+        if self.ego.frozen and not was_frozen:
             events.append("ego_crashed")
         if terminated and not self._terminated_reported:
             self._terminated_reported = True
             events.append("env_terminated")
-        events.extend(self._remove_crashed())
+        events.extend(self._remove_crashed(collisions))
         self._remove_far()
         events.extend(self._run_scripts())
         self._fill(self.config.spawn_min_distance_m)
-        return self._state(tuple(events))
+        return self._state(tuple(events), collisions)
 
     def close(self) -> None:
         self.env.close()
@@ -237,12 +246,35 @@ class TrafficWorld:
     def _others(self) -> list:
         return [vehicle for vehicle in self.env.unwrapped.road.vehicles if vehicle is not self.ego]
 
-    def _remove_crashed(self) -> list[str]:
-        """Remove the non-ego vehicles highway-env marked crashed; one ``vehicle_crashed`` event each."""
+    def _watch_steps(self, road) -> None:
+        """Check for collisions after every simulation step of ``road`` (highway-env steps it
+        ``simulation_substeps`` times a frame): the ego and what it touched freeze at that step."""
+        step, watch = road.step, self._watch
+
+        def watched_step(dt: float) -> None:
+            watch.before_step(road)
+            step(dt)
+            for collision in watch.after_step(road):
+                if collision.geometry and EGO_ID in (collision.first, collision.second):
+                    self._freeze_with_ego(road, collision)
+
+        road.step = watched_step
+
+    def _freeze_with_ego(self, road, collision: Collision) -> None:
+        other = collision.second if collision.first == EGO_ID else collision.first
+        self.ego.freeze()
+        for vehicle in road.vehicles:
+            if vehicle is not self.ego and vehicle.simrig_id == other:
+                vehicle.freeze()
+
+    def _remove_crashed(self, collisions: tuple[Collision, ...]) -> list[str]:
+        """Remove the non-ego vehicles that collided during this frame and did not touch the ego (those freeze with
+        it); one ``vehicle_crashed`` event each."""
         road = self.env.unwrapped.road
-        crashed = [v for v in road.vehicles if v.crashed and v is not self.ego]
+        ids = {c.first for c in collisions if c.geometry} | {c.second for c in collisions if c.geometry}
+        crashed = [v for v in road.vehicles if v is not self.ego and not v.frozen and v.simrig_id in ids]
         if crashed:
-            road.vehicles = [v for v in road.vehicles if not v.crashed or v is self.ego]
+            road.vehicles = [v for v in road.vehicles if all(v is not c for c in crashed)]
         return [f"vehicle_crashed id={v.simrig_id}" for v in sorted(crashed, key=lambda v: v.simrig_id)]
 
     def _remove_far(self) -> None:
@@ -465,7 +497,7 @@ class TrafficWorld:
         return RoadMarkings(tuple(lines), tuple(dashed), centre=(float(ego[0]), float(-ego[1])))
 
     # ------------------------------------------------------------------ ground truth
-    def _state(self, events: tuple[str, ...]) -> GroundTruthFrame:
+    def _state(self, events: tuple[str, ...], collisions: tuple[Collision, ...] = ()) -> GroundTruthFrame:
         """Ground truth now, converted from highway-env's frame (y right) to the world frame (y left)."""
         others = self._others()
         for vehicle in others:
@@ -502,6 +534,7 @@ class TrafficWorld:
             classes=np.array([v.ACTOR_CLASS.value for v in others], dtype=object),
             boxes=boxes,
             events=events,
+            collisions=collisions,
         )
 
 

@@ -43,6 +43,28 @@ class SimrigVehicle(IDMVehicle):
     DISTANCE_WANTED = JAM_GAP_M + CLASS_SPECS[ActorClass.CAR].length
     simrig_id: int = -1
     """The actor id simrig gave this vehicle (highway-env has none)."""
+    frozen: bool = False
+    """True once the vehicle stands where it collided (:meth:`freeze`)."""
+
+    def handle_collisions(self, other, dt: float = 0) -> None:
+        """highway-env's crash check on the footprints as they are now (``dt = 0``), not as they would be after
+        another step at constant velocity: its flag then means what the geometric check means — the footprints
+        touch or overlap at the end of a simulation step (:mod:`simrig.world.collisions`)."""
+        super().handle_collisions(other, 0.0)
+
+    def freeze(self) -> None:
+        """Stand still from now on where the vehicle is (after a collision): speed 0, no acceleration, no steering,
+        and no push apart from highway-env (its ``impact``)."""
+        self.frozen = True
+        self.speed = 0.0
+        self.target_speed = 0.0
+        self.impact = None
+
+    def step(self, dt: float) -> None:
+        if self.frozen:
+            self.speed, self.impact = 0.0, None
+            return
+        super().step(dt)
 
     def desired_gap(self, ego_vehicle, front_vehicle=None, projected: bool = True) -> float:
         """Desired centre-to-centre distance [m] from ``ego_vehicle`` to ``front_vehicle`` (module docstring)."""
