@@ -95,7 +95,8 @@ def test_two_other_vehicles_that_collide_are_rows_of_the_dataset_not_only_manife
     def reset_then_crash(self):
         state = reset(self)
         a, b = [v for v in self.env.unwrapped.road.vehicles if v is not self.ego][:2]
-        b.position = a.position - 1.0 * a.direction  # 1 m behind a's centre, 5 m/s faster: into a's rear
+        gap = 0.3  # [m] between b's front and a's rear; b is 5 m/s faster: it closes ≥ 0.44 m in the step
+        b.position = a.position - ((a.LENGTH + b.LENGTH) / 2.0 + gap) * a.direction
         b.heading, b.speed = a.heading, a.speed + 5.0
         crashed.extend(sorted((a.simrig_id, b.simrig_id)))
         return state
@@ -106,7 +107,7 @@ def test_two_other_vehicles_that_collide_are_rows_of_the_dataset_not_only_manife
     rows = Dataset.open(tmp_path / "ds").table("collisions").to_pylist()
     assert [(r["frame"], r["first"], r["second"], r["geometry"], r["highway_env"]) for r in rows] == [
         (1, *crashed, True, True)]
-    assert 0.0 < rows[0]["closing_speed"] <= 5.0 + 1e-9  # b ran into a at no more than the 5 m/s it had on a
+    assert 4.0 < rows[0]["closing_speed"] <= 5.0 + 1e-9  # 5 m/s less what IDM braking took off in one step
 
 
 class Blind:
@@ -180,3 +181,15 @@ def test_geometry_and_highway_envs_flag_agree_on_every_catalog_scenario(name):
     """Seeds 100-104 as the catalog drives them, and again with a blind ego (so that collisions happen)."""
     found = [c for seed in range(100, 105) for blind in (False, True) for c in _traffic_collisions(name, seed, blind)]
     assert all(c.geometry and c.highway_env for c in found), [c for c in found if not (c.geometry and c.highway_env)]
+
+
+def test_closing_speed_is_along_the_contact_normal_worked_out_by_hand():
+    """Side by side, b 1.8 m to a's left (0.1 m of overlap across, 3.6 m along): the contact normal is across, and
+    b drifting right at 1.5 m/s closes at 1.5 m/s whatever both do along the road."""
+    from simrig.world.collisions import closing_speeds
+
+    centres = np.array([[0.0, 0.0], [1.0, 1.8]])
+    size = (np.zeros(2), np.full(2, 4.6), np.full(2, 1.9))
+    assert touching_pairs(centres, *size).tolist() == [[0, 1]]
+    speed = closing_speeds(centres, *size, np.array([[20.0, 0.0], [25.0, -1.5]]), np.array([[0, 1]]))
+    assert speed.tolist() == pytest.approx([1.5])

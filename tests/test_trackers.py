@@ -385,3 +385,34 @@ def test_mutr3d_keeps_a_far_car_whose_3d_estimate_projects_beside_its_2d_box():
     image_gate = {track.track_id for tracks in _run("mutr3d", frames, cost2d="iou") for track in tracks}
     assert default == {1}
     assert len(image_gate) > 1
+
+
+def _braking_car(frames=30, deceleration=8.0):
+    """A car 20 m ahead at 20 m/s that brakes at ``deceleration`` [m/s²] from frame 5, seen by camera A with its
+    exact position and velocity (what the ``perfect`` detector preset reports)."""
+    out, x, v = [], 20.0, 20.0
+    for k in range(frames):
+        out.append((_frame(k, {"A": [_detection(x, 0.0, vx=v)]}), v))
+        if k >= 5:
+            v = max(v - deceleration * DT, 0.0)
+        x += v * DT
+    return out
+
+
+def test_mutr3d_moves_its_track_with_the_detections_velocity_as_its_paper_moves_a_query():
+    """MUTR3D's reference point moves with the velocity predicted from the image (Eq. 7); with exact velocities the
+    track's speed is the car's at every frame, while a constant-velocity filter fed positions (global_hungarian)
+    lags behind the braking car."""
+    frames = _braking_car()
+    for name, worst in (("mutr3d", 1e-9), ("global_hungarian", None)):
+        t = tracker.create(name)
+        t.reset(rig=RIG, seed=0)
+        errors = []
+        for frame, true_speed in frames:
+            tracks = t.step(frame)
+            if tracks:
+                errors.append(tracks[0].box3d.vx - true_speed)
+        if worst is not None:
+            assert max(abs(e) for e in errors) <= worst, name
+        else:
+            assert max(errors) > 2.0, name  # lags by more than 2 m/s while braking

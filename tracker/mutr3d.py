@@ -19,7 +19,11 @@ in, and lives and dies by its score (§3.4). Without the learned decoder, the sa
    ≤ 20 px, so IoU ≥ 0.1 rejected 24 % of the true pairs, the track died and was reborn under a new id
    (``reports/trackers/mutr3d.md``). The image costs stay as options;
 4. update each track in 3D with the 3D boxes of the detections every camera matched to it (sequential
-   updates, as the other Kalman trackers);
+   updates, as the other Kalman trackers); its velocity is then the velocity its best-scored matched detection
+   carries, when it carries one: MUTR3D moves a query's reference point with the velocity the network predicts
+   from the image (Eq. 7, "velocity predicted from queries", not a Kalman filter's estimate from positions), and
+   the detector's velocity stands in for that prediction here. A filter fed positions alone lags a braking car
+   by several m/s (``reports/velocity_lag/``);
 5. life: MUTR3D's query life management (:class:`~simrig.trackers.life.QueryLife`): start at score ≥ τ_new = 0.4,
    die after T = 5 successive frames below τ_old = 0.35 (``life="mutr3d"``, §3.4) or by the public code's
    count (``life="mutr3d_code"``), reported while the frame's score ≥ τ_old. Unmatched detections of one
@@ -107,6 +111,21 @@ class Mutr3dTracker(KalmanTracker):
             cost[labels[:, None] != detections.labels[rows][None, :]] = np.inf
             out.append((rows, cost))
         return out
+
+    def update(self, detections: DetectionArrays, owner: np.ndarray) -> dict[int, float]:
+        """The Kalman update of every matched track, then its velocity [m/s, world frame] set to its best-scored
+        matched detection's, where that detection has one (module docstring, step 4)."""
+        scores = super().update(detections, owner)
+        velocities = detections.boxes3d[:, 7:9] if detections.boxes3d.shape[1] >= 9 else None
+        if velocities is None:
+            return scores
+        taken: set[int] = set()
+        for j in np.lexsort((np.arange(len(owner)), -detections.scores)):  # highest score first
+            i = int(owner[j])
+            if i != UNMATCHED and i not in taken and np.isfinite(velocities[j]).all():
+                taken.add(i)
+                self.tracks[i].kf.x[7:9, 0] = velocities[j]
+        return scores
 
     def associate(self, detections: DetectionArrays) -> np.ndarray:
         """owner (M,): per camera, a Hungarian between the projected tracks and that camera's detections."""

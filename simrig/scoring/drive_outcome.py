@@ -14,7 +14,8 @@ the ground truth of the driven world.
 * ``near_misses``: the frames where a time to collision first drops below :data:`NEAR_MISS_TTC_S` (one per run of
   consecutive frames below it), collisions excepted.
 * ``hard_brakes``: the frames where the ego's realised deceleration first exceeds :data:`HARD_BRAKE_MPS2` (one per
-  run of consecutive frames), from its speed change between frames.
+  run of consecutive frames), from its speed change between frames; the step into a collision (where the ego stops
+  dead) is not braking and does not count.
 * ``progress_m`` [m]: the path length the ego drove.
 """
 
@@ -97,7 +98,7 @@ def drive_outcome(truth: GroundTruth) -> DriveOutcome:
         min_ttc_s=float(ttc_scored[best]) if len(ttc_scored) else float("inf"),
         min_ttc_frame=int(truth.frames[best]) if len(ttc_scored) and np.isfinite(ttc_scored[best]) else None,
         near_misses=_onsets(truth.frames, ttc_scored < NEAR_MISS_TTC_S),
-        hard_brakes=_onsets(truth.frames, hard & scored), progress_m=float(step.sum()),
+        hard_brakes=_onsets(truth.frames, hard & np.append(scored[1:], False)), progress_m=float(step.sum()),
     )
 
 

@@ -1,4 +1,4 @@
-"""Report: the 3D reference trackers in the loop (issue 31, check 3).
+"""Report: the 3D reference trackers in the loop.
 
     python tests/perf/closed_loop.py [--work runs/closed-loop] [--workers 2]
 
@@ -45,7 +45,28 @@ def _drive(job: tuple[str, int, str | None, Path]) -> dict:
         done = drive(loaded, seed=seed, out=folder, tracker=tracker, overwrite=True).outcome
     outcome = done
     return {"scenario": scenario, "seed": seed, "tracker": tracker or GROUND_TRUTH, "folder": str(folder),
-            **outcome.to_dict()}
+            "kind": _collision_kind(folder, outcome), **outcome.to_dict()}
+
+
+def _collision_kind(folder: Path, outcome) -> str | None:
+    """How the ego's first collision happened, from where the other road user was in the ego frame at that frame:
+    ``rear-end`` (the ego ran into a car ahead of it in its lane: centres within 0.5 m across), ``hit from
+    behind``, ``side`` (the other was beside the ego's path: in these scenarios a vehicle changing lanes, yawed
+    10–20° to the ego), ``obstacle``."""
+    if outcome.collision_frame is None:
+        return None
+    if outcome.collision_actor is None or outcome.collision_actor < 0:
+        return "obstacle" if outcome.collision_actor == -2 else None
+    from simrig.dataset import Dataset
+
+    truth = Dataset.open(folder / "dataset").ground_truth
+    ego = truth.egos[int(np.searchsorted(truth.frames, outcome.collision_frame))]
+    row = np.flatnonzero((truth.frame == outcome.collision_frame) & (truth.actor_id == outcome.collision_actor))[0]
+    dx, dy = truth.boxes[row, 0] - ego.x, truth.boxes[row, 1] - ego.y
+    along, across = dx * np.cos(ego.yaw) + dy * np.sin(ego.yaw), -dx * np.sin(ego.yaw) + dy * np.cos(ego.yaw)
+    if abs(across) >= 0.5:
+        return "side"
+    return "rear-end" if along > 0 else "hit from behind"
 
 
 def _finished(folder: Path, scenario, seed: int):
@@ -76,7 +97,9 @@ def _table(rows: list[dict]) -> list[str]:
             progress = np.mean([r["progress_m"] for r in mine])
             paired = "" if tracker == GROUND_TRUTH else "<br>" + paired_difference(
                 [r["progress_m"] for r in mine], [truth[r["seed"]]["progress_m"] for r in mine]).text(digits=1)
-            lines.append(f"| {scenario} | {tracker} | {sum(r['collisions'] > 0 for r in mine)} of {len(mine)} "
+            kinds = [r["kind"] for r in mine if r["kind"]]
+            how = f" ({', '.join(f'{kinds.count(k)} {k}' for k in sorted(set(kinds)))})" if kinds else ""
+            lines.append(f"| {scenario} | {tracker} | {sum(r['collisions'] > 0 for r in mine)} of {len(mine)}{how} "
                          f"| {sum(bool(r['near_misses']) for r in mine)} of {len(mine)} | {ttc:.2f} "
                          f"| {np.mean([len(r['hard_brakes']) for r in mine]):.1f} | {progress:.1f}{paired} |")
     return lines
@@ -91,10 +114,11 @@ def _caused(rows: list[dict]) -> list[dict]:
             continue
         t = truth[(r["scenario"], r["seed"])]
         if r["collisions"] and not t["collisions"]:
-            out.append({**r, "what": "collision", "frame": r["collision_frame"]})
+            speed = "" if r["collision_speed_mps"] is None else f", closing at {r['collision_speed_mps']:.1f} m/s"
+            out.append({**r, "what": f"collision ({r['kind']}{speed})", "frame": r["collision_frame"]})
         elif r["near_misses"] and not t["near_misses"] and not t["collisions"]:
             out.append({**r, "what": "near miss", "frame": r["near_misses"][0]})
-    return sorted(out, key=lambda r: (r["what"] != "collision", r["scenario"], r["seed"], r["tracker"]))
+    return sorted(out, key=lambda r: (not r["what"].startswith("collision"), r["scenario"], r["seed"], r["tracker"]))
 
 
 def main() -> int:
@@ -112,7 +136,14 @@ def main() -> int:
              f"closed loop (`simrig drive`), seeds {SEEDS[0]}–{SEEDS[-1]}, next to the drive on the ground truth "
              "(within the class ranges). Near miss: time to collision < 1.5 s; hard brake: deceleration > 4 m/s². "
              "Definitions: docs/planner.md.", "", *_table(rows), "",
-             "## Collisions and near misses the ground truth did not have", ""]
+             "## Where the ground-truth drive itself collides", ""]
+    truth_crashes = [r for r in rows if r["tracker"] == GROUND_TRUTH and r["collisions"]]
+    lines += [f"- {r['scenario']}, seed {r['seed']}: {r['kind']} at frame {r['collision_frame']} with actor "
+              f"{r['collision_actor']}; `simrig drive {r['scenario']} --seed {r['seed']} --tracker saga` shows it "
+              "beside a tracker's drive" for r in truth_crashes] or ["None."]
+    lines += ["", "A collision on perfect perception is the scenario's (a scripted or lane-changing vehicle steering "
+              "into the ego), not a tracker's; the trackers' drives of that scenario and seed are left out of the "
+              "list below.", "", "## Collisions and near misses the ground truth did not have", ""]
     if not caused:
         lines.append("None in these drives.")
     for r in caused:
