@@ -155,10 +155,10 @@ class ClutterConfig(Strict):
 
 class EmbeddingConfig(Strict):
     """Appearance embeddings (re-ID features): per identity a fixed unit vector, mixed with a vector shared
-    by every vehicle of its class and colour (``lookalike_weight``) and with a view vector per side (front,
-    side, back) it is seen from (``viewpoint_weight``); plus two drifts with memory, per actor and camera
-    (Ornstein–Uhlenbeck processes: a fast one for pose and lighting, a slow one for lasting change of look),
-    and white noise per observation, renormalised. The white noise vector has norm ≈ σ = (sigma +
+    by every vehicle of its class and colour (``lookalike_weight``) and with a view vector that turns smoothly
+    with the direction it is seen from (``viewpoint_weight``, ``viewpoint_scale_deg``); plus two drifts with
+    memory per actor, the same for every camera at one instant (Ornstein–Uhlenbeck processes: a fast one for pose
+    and lighting, a slow one for lasting change of look), and white noise per observation, renormalised. The white noise vector has norm ≈ σ = (sigma +
     occlusion_sigma · occlusion + truncation_sigma · truncation) · (1 + d / distance_scale_m); the drifts have
     norms ≈ ``drift_sigma`` and ``slow_drift_sigma`` (same growth factors). An actor seen again after g frames
     keeps a share exp(−g·Δt / τ) of each drift, so it looks less like itself the longer the gap.
@@ -189,7 +189,11 @@ class EmbeddingConfig(Strict):
     colours: Annotated[int, Field(ge=1, le=1000)] = 8
     """[-] number of paint colours, drawn uniformly per vehicle."""
     viewpoint_weight: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)] = 0.0
-    """[-] share of an embedding that depends on the side seen (front, side, back)."""
+    """[-] share of an embedding that depends on the direction the actor is seen from."""
+    viewpoint_scale_deg: Annotated[float, Field(ge=5, le=180, allow_inf_nan=False)] = 30.0
+    """[deg] how far the viewing direction turns before the view part changes: the width λ of its kernel (view
+    vectors Δ apart have a cosine of about exp(−Δ²/4λ²): at 30°, 0.93 for 15°, 0.77 for 30°, 0.35 for 60°, 0.09
+    for 90°; 1.00 for the 1.5° between a stereo pair's rays to a car 20 m away)."""
     drift_sigma: Annotated[float, Field(ge=0, le=10, allow_inf_nan=False)] = 0.0
     """[-] norm of the fast drift (0: none)."""
     drift_time_s: Annotated[float, Field(gt=0, le=3600, allow_inf_nan=False)] = 0.5

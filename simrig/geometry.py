@@ -290,3 +290,16 @@ def _project_boxes_from(boxes: np.ndarray, rig: Rig, transforms: np.ndarray) -> 
     return Projection(
         boxes=clipped, unclipped=unclipped, truncation=truncation, depth=centres[..., 2], in_view=in_view
     )
+
+
+def viewing_bearings(boxes3d: np.ndarray, camera_centre: np.ndarray) -> np.ndarray:
+    """[rad] in (−π, π] the bearing of each camera's ray to each box in the box's own frame (0: the camera sees the
+    back, ±π the front, ±π/2 a side); ``boxes3d`` ``(K, ≥7)`` world frame, ``camera_centre`` ``(3,)`` or
+    ``(K, 3)``.
+
+    >>> boxes = np.array([[10.0, 0.0, 0, 4, 2, 1, 0.0], [10.0, 0.0, 0, 4, 2, 1, np.pi]])
+    >>> np.rad2deg(viewing_bearings(boxes, np.zeros(3))).round(6).tolist()  # behind a car, then facing one
+    [0.0, 180.0]
+    """
+    ray = boxes3d[:, :2] - camera_centre[..., :2]
+    return np.pi - (np.pi - (np.arctan2(ray[:, 1], ray[:, 0]) - boxes3d[:, 6])) % (2 * np.pi)

@@ -253,7 +253,7 @@ def test_a_dataset_file_replaced_by_a_fifo_or_a_device_is_refused(command, targe
 
 DATASET_FILES = ("manifest.json", "rig.json", "road.json", "ego_poses.parquet", "frames.parquet",
                  "ground_truth.parquet", "projections.parquet", "visibility.parquet", "detections.parquet",
-                 "sensor_truth.parquet", "truth_plans.parquet")
+                 "sensor_truth.parquet", "truth_plans.parquet", "collisions.parquet")
 
 
 @pytest.mark.parametrize("target", ["fifo", "/dev/zero"])

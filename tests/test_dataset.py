@@ -31,7 +31,7 @@ def test_manifest_describes_the_run_and_ends_with_complete(tmp_path, small_scena
     assert {"highway-env", "numpy", "pyarrow", "python"} <= set(manifest["versions"])
     assert set(manifest["files"]) == {
         "ego_poses", "ground_truth", "projections", "visibility", "detections", "sensor_truth", "frames", "rig", "road",
-        "truth_plans",
+        "truth_plans", "collisions",
     }
     dataset = Dataset.open(result.path, verify=True)
     assert dataset.table("ego_poses").num_rows == 12

@@ -11,9 +11,10 @@ of occlusion, truncation, range or the side seen, so their effects are folded in
   :data:`GAPS` with at least :data:`MIN_PAIRS` pairs — which sets ``sigma``, the two drifts' norms and their
   correlation times (at the log's frame rate);
 * from same-identity pairs seen by two cameras at the same frame (when the log has them), the mean cosine
-  similarity — the drifts of two cameras are independent, so this separates the drifts from the identity (a
-  single-camera log cannot tell a slow drift from a lasting appearance: then ``slow_drift_sigma`` and
-  ``slow_drift_time_s`` are poorly determined, and the summary says so);
+  similarity — two cameras see the same drifts at one instant and differ by their images' noise alone, so this
+  separates ``sigma`` from the drifts (a slow drift is told from a lasting appearance only by the longest gaps:
+  a log shorter than a few of its correlation times determines ``slow_drift_sigma`` and ``slow_drift_time_s``
+  poorly, and the summary says so);
 * from different-identity pairs of one camera 1–30 frames apart, the mean and the standard deviation of the
   cosine similarity — which set the effective ``dimension``. ``lookalike_weight`` and ``colours`` are given, not
   fitted (default 0.3 and 8, the realistic presets'): they move the different-identity mean by only about
@@ -198,7 +199,7 @@ class _Simulator:
         self.innovation = rng.standard_normal((len(gaps), 2, m, d)) / np.sqrt(d)
         self.noise = rng.standard_normal((len(gaps), 2, m, d)) / np.sqrt(d)
         self.stranger = rng.standard_normal((3, m, d)) / np.sqrt(d)  # the other actor's two drifts and noise
-        self.other_camera = rng.standard_normal((3, m, d)) / np.sqrt(d)  # another camera's drifts and noise
+        self.other_camera = rng.standard_normal((m, d)) / np.sqrt(d)  # another camera's noise at the same instant
 
     def moments(self, sigma: float, drifts: np.ndarray, phis: np.ndarray, lookalike: float, period: float
                 ) -> tuple[np.ndarray, float, float, float]:
@@ -222,8 +223,7 @@ class _Simulator:
         other = _unit(stranger + drifts[0] * self.stranger[0] + drifts[1] * self.stranger[1]
                       + sigma * self.stranger[2])
         different = np.einsum("pd,pd->p", first, other)
-        elsewhere = _unit(identity + drifts[0] * self.other_camera[0] + drifts[1] * self.other_camera[1]
-                          + sigma * self.other_camera[2])
+        elsewhere = _unit(identity + drift_now + sigma * self.other_camera)  # the same drifts, its own noise
         cross = float(np.einsum("pd,pd->p", first, elsewhere).mean())
         return same, float(different.mean()), float(different.std(ddof=1)), cross
 
@@ -341,8 +341,11 @@ def fit_embeddings_to_toml(path: Path, out: Path, frame_rate_hz: float = 10.0, *
         *([] if len(np.unique(log.identity)) >= 10 else [
             f"WARNING: only {len(np.unique(log.identity))} identities: the different-identity moments are unreliable"]),
         *([] if m.cross_mean is not None else [
-            "one camera per identity and frame: a slow drift cannot be told from a lasting look, so slow_drift_sigma",
-            "and slow_drift_time_s are poorly determined (log two cameras seeing the same objects to pin them)"]),
+            "one camera per identity and frame: the images' own noise is told from the fast drift only by the",
+            "shortest gaps (log two cameras seeing the same objects at the same instant to pin sigma)"]),
+        *([] if (span := float(m.gaps.max()) / frame_rate_hz) >= 2 * fit.settings["slow_drift_time_s"] else [
+            f"the longest gap, {span:g} s, is under twice slow_drift_time_s: a slow drift is told from a lasting "
+            "look only by gaps that span its memory, so slow_drift_sigma and slow_drift_time_s are uncertain"]),
     ]
     text = "".join(f"# {note}\n" for note in notes) + tomli_w.dumps({"sensor": {"embedding": settings}})
     lines = ["gap [frames]  mean cos same (this log)  (fitted model)"]

@@ -30,7 +30,7 @@ from ..causes import Cause, cause_masks
 from ..dataset import Dataset
 from ..dataset.ground_truth import per_label
 from ..dataset.reader import embedding_matrix
-from ..geometry import camera_from_world
+from ..geometry import camera_from_world, viewing_bearings
 from ..types import BOX3D_FIELDS, EgoPose
 from .nuscenes_metrics import DIST_THRESHOLDS, TP_METRICS, TP_THRESHOLD, accumulate, calc_ap, calc_tp, match_class
 from .reid import EmbeddingLog, ReidRow, format_table, reid_table
@@ -191,8 +191,10 @@ def embedding_log(dataset: Dataset) -> EmbeddingLog:
     lengths = np.diff(column.combine_chunks().offsets.to_numpy())
     embeddings = embedding_matrix(column, int(lengths.max()) if len(lengths) else 0)[links["row"]]
     keep = np.isfinite(embeddings).all(axis=1)
+    bearing = viewing_bearings(links["truth"][keep], links["centre"][keep])
     return EmbeddingLog(np.zeros(int(keep.sum()), dtype=np.int64), links["frame"][keep].astype(np.int64),
-                        links["camera"][keep], links["actor"][keep].astype(np.int64), embeddings[keep].astype(float))
+                        links["camera"][keep], links["actor"][keep].astype(np.int64), embeddings[keep].astype(float),
+                        bearing=bearing, position=links["centre"][keep])
 
 
 def linked_errors(dataset: Dataset) -> dict[str, np.ndarray]:

@@ -1,29 +1,38 @@
-"""Appearance (re-ID) embeddings with memory, shaped like a real re-ID model's.
+"""Appearance (re-ID) embeddings with memory, shaped like a real re-ID model's, and the same whichever camera looks.
 
-An actor's appearance seen from side s (back, side, front) is
+What two observations of one actor look like depends on the change of view between them — the angle between the
+viewing directions (the side of the car seen), the time between them, occlusion, truncation and distance — not on
+whether one camera or two made them. An actor seen along the viewing bearing θ (the direction of the ray from the
+camera to the actor, in the actor's own frame) has the appearance
 
-    a = unit(√(1 − v) · identity + √v · view_s),   identity = unit(√(1 − w) · own + √w · lookalike[class, colour])
+    a(θ) = unit(√(1 − v) · identity + √v · view(θ)),   identity = unit(√(1 − w) · own + √w · lookalike[class, colour])
+    view(θ) = unit(Σ_k exp(−δ(θ, φ_k)² / (2 λ²)) · u_k)
 
-with ``own`` and the three ``view`` vectors fixed random unit vectors per actor (the ``embeddings`` stream,
-per actor id), ``lookalike`` one per (class, colour) pair, w = ``lookalike_weight``, v = ``viewpoint_weight``.
-An observation by camera c at frame t is
+with ``own`` and the view anchors ``u_k`` fixed random unit vectors per actor (the ``embeddings`` stream, per actor
+id) at bearings φ_k every :data:`ANCHOR_SPACING_DEG`, δ the wrapped angle between bearings, λ =
+``viewpoint_scale_deg``, ``lookalike`` one per (class, colour) pair, w = ``lookalike_weight``, v =
+``viewpoint_weight``. view(θ) turns smoothly as the bearing turns: two cameras of a stereo pair 0.54 m apart see a
+car 20 m away along bearings 1.5° apart, and the cameras of a surround ring, mounted together, see it along
+bearings as close, so both see nearly the same a(θ); a car overtaken is seen from behind, the side and the front
+in turn. An observation by camera c at frame t is
 
-    e = unit(a + g · (s_f · x_f(t) + s_s · x_s(t)) + σ · n / √D)
+    e = unit(a(θ) + g · (s_f · x_f(t) + s_s · x_s(t)) + σ · n / √D)
 
-with n standard normal (white, drawn afresh per frame), σ = (sigma + occlusion_sigma · occlusion +
-truncation_sigma · truncation) · g, g = (1 + d / distance_scale_m) · noise factor, and x_f, x_s two drifts with
-memory per (actor, camera): Ornstein–Uhlenbeck processes in ℝᴰ with stationary covariance I/D (so |x| ≈ 1)
-and correlation times ``drift_time_s`` and ``slow_drift_time_s``, s_f = ``drift_sigma``, s_s =
-``slow_drift_sigma``. Two observations g frames apart by one camera share a fraction exp(−g·Δt/τ) of each
-drift, so an actor looks less like itself the longer it is away (as the features of a real re-ID model do:
-pose, lighting and occlusion change); two cameras see independent drifts of the same actor. The drifts are
-advanced for every actor in the frame's actor list, seen or not, from their own stream per camera, so their
-draws never depend on another cause's settings.
+with n standard normal, drawn afresh per observation (per camera: the image's own noise), σ = (sigma +
+occlusion_sigma · occlusion + truncation_sigma · truncation) · g, g = (1 + d / distance_scale_m) · noise factor,
+and x_f, x_s two drifts with memory per actor: Ornstein–Uhlenbeck processes in ℝᴰ with stationary covariance I/D
+(so |x| ≈ 1) and correlation times ``drift_time_s`` and ``slow_drift_time_s``, s_f = ``drift_sigma``, s_s =
+``slow_drift_sigma``. The drifts are the actor's look changing in time (pose, lighting, dirt): every camera sees
+the same drift at the same instant, and two observations g frames apart share a fraction exp(−g·Δt/τ) of each, so
+an actor looks less like itself the longer it is away. Two synchronised cameras therefore differ by their images'
+noise and the small change of bearing alone, and land where one camera's gap-1 pairs land or closer. The drifts
+are advanced for every actor in the frame's actor list, seen or not, from their own stream, so their draws never
+depend on another cause's settings.
 
 With ``target_auc`` set, ``sigma`` is solved for by bisection on a Monte Carlo estimate (a fixed stream,
 common random numbers) of the ROC AUC of cosine distance between same-identity pairs (two observations of
 one appearance) and different-identity pairs (two actors with classes from the traffic's class mix and
-uniform colours, from the same side) at the reference condition: unoccluded, untruncated, d → 0.
+uniform colours, seen along the same bearing) at the reference condition: unoccluded, untruncated, d → 0.
 """
 
 from __future__ import annotations
@@ -32,11 +41,15 @@ import numpy as np
 
 from simrig.scenarios.sensor_schema import EmbeddingConfig
 
+from ..geometry import viewing_bearings
 from ..seeding import RandomStreams
 from .batch import SensorBatch
 from .processes import GaussMarkov, ar1_coefficient
 
-_SIDES = 3  # back, side, front
+ANCHOR_SPACING_DEG = 15.0
+"""[deg] bearings of an actor's view anchors (24 around it): fine beside any kernel width above ~10°."""
+_ANCHORS = int(round(360.0 / ANCHOR_SPACING_DEG))
+_ANCHOR_BEARINGS = np.deg2rad(np.arange(_ANCHORS) * ANCHOR_SPACING_DEG)
 _CALIBRATION_STREAM = 10
 _LOOKALIKE_STREAM = 11
 _NOISE_STREAM = 4  # the embedding noise's stream key since the first sensor model: never renumber
@@ -63,12 +76,11 @@ def roc_auc(positive: np.ndarray, negative: np.ndarray) -> float:
     return float((ranks[:n_pos].sum() - n_pos * (n_pos + 1) / 2) / (n_pos * n_neg))
 
 
-def _viewed_side(boxes3d: np.ndarray, camera_centre: np.ndarray) -> np.ndarray:
-    """Which side of each box the camera sees: 0 back, 1 side, 2 front (from the bearing of the camera's ray
-    relative to the box's yaw); ``camera_centre`` ``(3,)``, or ``(K, 3)``: one per box."""
-    ray = boxes3d[:, :2] - camera_centre[..., :2]
-    relative = np.abs((np.arctan2(ray[:, 1], ray[:, 0]) - boxes3d[:, 6] + np.pi) % (2 * np.pi) - np.pi)
-    return np.where(relative < np.pi / 4, 0, np.where(relative > 3 * np.pi / 4, 2, 1))
+def view_weights(bearings: np.ndarray, scale_deg: float) -> np.ndarray:
+    """``(K, anchors)`` weights of the view anchors at ``bearings`` [rad]: a Gaussian of the wrapped angle to each
+    anchor, width ``scale_deg``."""
+    delta = (bearings[:, None] - _ANCHOR_BEARINGS[None, :] + np.pi) % (2 * np.pi) - np.pi
+    return np.exp(-0.5 * (delta / np.deg2rad(scale_deg)) ** 2)
 
 
 class Embeddings:
@@ -96,13 +108,13 @@ class Embeddings:
 
     # ------------------------------------------------------------------ fixed vectors
     def _actor(self, actor_id: int) -> tuple[np.ndarray, int, np.ndarray]:
-        """(own unit vector, colour, view unit vectors (3, D)) of an actor, from its ``embeddings`` stream."""
+        """(own unit vector, colour, view anchors (anchors, D)) of an actor, from its ``embeddings`` stream."""
         if actor_id not in self._actors:
             rng = self._streams.generator("embeddings", int(actor_id))
             d = self.config.dimension
             own = _unit(rng.standard_normal(d))
             colour = int(rng.integers(self.config.colours))
-            views = _unit(rng.standard_normal((_SIDES, d)))
+            views = _unit(rng.standard_normal((_ANCHORS, d)))
             self._actors[actor_id] = (own, colour, views)
         return self._actors[actor_id]
 
@@ -122,18 +134,17 @@ class Embeddings:
             return own
         return _unit(np.sqrt(1 - w) * own + np.sqrt(w) * self._lookalike_vector(label, colour))
 
-    def appearance(self, actor_ids: np.ndarray, labels: np.ndarray, sides: np.ndarray) -> np.ndarray:
-        """Noise-free unit appearance vectors ``(N, D)`` of actors seen from ``sides``."""
-        d, v = self.config.dimension, self.config.viewpoint_weight
-        out = np.empty((len(actor_ids), d))
-        for row, (actor_id, label, side) in enumerate(zip(actor_ids.tolist(), labels, sides.tolist(), strict=True)):
-            key = (actor_id, side)
-            if key not in self._appearance:
-                identity = self.identity(actor_id, str(label))
-                self._appearance[key] = identity if v == 0 else _unit(
-                    np.sqrt(1 - v) * identity + np.sqrt(v) * self._actor(actor_id)[2][side])
-            out[row] = self._appearance[key]
-        return out
+    def appearance(self, actor_ids: np.ndarray, labels: np.ndarray, bearings: np.ndarray) -> np.ndarray:
+        """Noise-free unit appearance vectors ``(N, D)`` of actors seen along ``bearings`` [rad]
+        (:func:`viewing_bearings`)."""
+        v = self.config.viewpoint_weight
+        identities = np.stack([self.identity(actor_id, str(label))
+                               for actor_id, label in zip(actor_ids.tolist(), labels, strict=True)])
+        if v == 0:
+            return identities
+        anchors = np.stack([self._actor(actor_id)[2] for actor_id in actor_ids.tolist()])  # (N, anchors, D)
+        views = _unit(np.einsum("nk,nkd->nd", view_weights(bearings, self.config.viewpoint_scale_deg), anchors))
+        return _unit(np.sqrt(1 - v) * identities + np.sqrt(v) * views)
 
     # ------------------------------------------------------------------ calibration
     def _solved_sigma(self, target_auc: float) -> float:
@@ -152,7 +163,7 @@ class Embeddings:
         d, m = c.dimension, _CALIBRATION_PAIRS
         rng = self._streams.generator("sensor", _CALIBRATION_STREAM)
         own = _unit(rng.standard_normal((2, m, d)))
-        views = _unit(rng.standard_normal((2, m, d)))
+        views = _unit(rng.standard_normal((2, m, d)))  # one bearing, shared by a pair: its view vector
         classes = rng.choice(len(self.class_names), size=(2, m), p=self.class_weights)
         colours = rng.integers(c.colours, size=(2, m))
         noise = rng.standard_normal((3, m, d)) / np.sqrt(d)
@@ -192,16 +203,14 @@ class Embeddings:
         return self._camera_stream(_NOISE_STREAM, camera_index)
 
     def drift(self, batch: SensorBatch) -> np.ndarray | None:
-        """The drifts s_f·x_f + s_s·x_s ``(C, N, D)`` of every camera's actors at this frame, advanced one frame
-        (None when both are off). Each camera draws 2·N·D normals from its own drift stream."""
+        """The drifts s_f·x_f + s_s·x_s ``(N, D)`` of the frame's actors, the same for every camera, advanced one
+        frame (None when both are off): 2·N·D normals from the drift stream."""
         if self._drift is None:
             return None
-        n, d, camera_count = len(batch), self.config.dimension, len(batch.cameras)
-        z = np.empty((n, camera_count, 2 * d))  # (N, C, 2D)
-        for index in range(camera_count):
-            z[:, index] = self._camera_stream(_DRIFT_STREAM, index).standard_normal((n, 2 * d))
-        state = self._drift.step(batch.actor_ids, z).reshape(n, camera_count, 2, d) / np.sqrt(d)
-        return np.einsum("ncjd,j->cnd", state, self.drift_scales)
+        n, d = len(batch), self.config.dimension
+        z = self._camera_stream(_DRIFT_STREAM, 0).standard_normal((n, 2 * d))
+        state = self._drift.step(batch.actor_ids, z).reshape(n, 2, d) / np.sqrt(d)
+        return np.einsum("njd,j->nd", state, self.drift_scales)
 
     def apply(self, batch: SensorBatch) -> None:
         c = self.config
@@ -218,10 +227,10 @@ class Embeddings:
         embeddings = np.full((len(batch.cameras), n, d), np.float32(np.nan), dtype=np.float32)
         cameras, actors = np.nonzero(batch.detected)
         if len(actors):
-            sides = _viewed_side(batch.boxes3d[cameras, actors], batch.world_from_camera[cameras, :3, 3])
-            appearance = self.appearance(batch.actor_ids[actors], batch.classes[actors], sides)
+            bearings = viewing_bearings(batch.boxes3d[cameras, actors], batch.world_from_camera[cameras, :3, 3])
+            appearance = self.appearance(batch.actor_ids[actors], batch.classes[actors], bearings)
             disturbance = noise[cameras, actors] * sigma[cameras, actors, None]
             if drift is not None:
-                disturbance += drift[cameras, actors] * growth[cameras, actors, None]
+                disturbance += drift[actors] * growth[cameras, actors, None]
             embeddings[cameras, actors] = _unit(appearance + disturbance) if self.enabled else appearance
         batch.embeddings = embeddings
