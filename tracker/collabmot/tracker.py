@@ -93,6 +93,8 @@ class CollabMOT:
         self._output_ids: dict[tuple[str, int], int] = {}
         self.association_seconds: list[float] = []
         self.restarts = 0
+        self.linked_pairs = 0
+        self._reconnected: set[tuple[int, int]] = set()
 
     def reset(self, *, rig: Rig, seed: int | None = None) -> None:
         """Start a sequence on ``rig``, which must have both cameras; ``seed`` is unused (deterministic)."""
@@ -138,6 +140,8 @@ class CollabMOT:
                            new_id=self._new_global_id)
         self.association_seconds.append(time.perf_counter() - start)
         self.restarts += result.restarts
+        self.linked_pairs += len(result.links)
+        self._reconnected |= {(id(lost), id(current)) for lost, current in result.reconnections if lost.camera == "ego"}
         if self.interpolate and self.revises_past:  # gap boxes belong to past frames: semi-online only
             self._connect([(lost, current) for lost, current in result.reconnections if lost.camera == "ego"])
         self._interpolate(t)
@@ -202,6 +206,20 @@ class CollabMOT:
         self.pending = waiting
         self.filled = [entry for entry in self.filled
                        if entry[0].global_id == entry[2] and entry[1].global_id == entry[2]]
+
+    def mechanism(self) -> dict[str, int]:
+        """What the collaboration did in the sequence so far: ``linked`` (ego, remote) pairs summed over frames,
+        ``reconnected`` lost ego tracklets continued through a global id (each pair once), ``relabelled`` ego
+        tracklets reported under an id another ego tracklet had before them, ``interpolated`` gap boxes filled
+        (semi-online only)."""
+        first_owner: dict[tuple[str, int], int] = {}
+        relabelled = 0
+        for tracklet in sorted(self.tracklets["ego"].values(), key=lambda c: (c.first, c.local_id)):
+            keys = {self._key(tracklet, g) for g in tracklet.ids.values() if g > 0}
+            owners = {first_owner.setdefault(key, tracklet.local_id) for key in keys}
+            relabelled += any(owner != tracklet.local_id for owner in owners)
+        return {"linked": self.linked_pairs, "reconnected": len(self._reconnected), "relabelled": relabelled,
+                "interpolated": sum(len(boxes) for *_, boxes in self.filled)}
 
     def _ego_boxes_at(self, frame: int) -> np.ndarray:
         boxes = [box for _, box in self.ego_boxes.get(frame, [])]
