@@ -110,3 +110,40 @@ def test_no_vehicle_in_the_catalog_turns_harder_than_the_bound(name):
     worst = max((_lateral(v).max(initial=0.0) for seed in range(100, 110) for v in _every_vehicle(name, seed)),
                 default=0.0)
     assert worst <= bound * MEASURED, (name, worst)
+
+
+def test_a_car_stopped_at_the_end_of_its_acceleration_lane_merges_when_the_lane_beside_it_is_free():
+    """``merge_surround6``'s road with no traffic but the ego: a car standing 8 m behind the end of an acceleration
+    lane (highway-env asks MOBIL only above 1 m/s, so it used to wait there for good) moves into the free lane
+    beside it within a few seconds, and hits nothing."""
+    from simrig.world.vehicles import VEHICLE_TYPES
+
+    from simrig.types import ActorClass
+
+    scenario = with_setting(with_setting(load_scenario("merge_surround6"), "render.visibility", False),
+                            "traffic.vehicles", 0)
+    world = _SimulatedWorld(scenario, None, RandomStreams(100), False).traffic
+    world.reset()
+    road = world.env.unwrapped.road
+    lanes = scenario.traffic.layout.lanes
+    lane_index = ("merge_0", "merged_0", lanes)  # the first ramp's acceleration lane
+    lane = road.network.get_lane(lane_index)
+    while world.ego.position[0] < lane.end[0] - 120.0:  # the ego drives up to 120 m short of its end
+        world.step()
+    car = VEHICLE_TYPES[ActorClass.CAR](road, lane.position(lane.length - 8.0 - 2.3, 0.0), heading=lane.heading_at(0),
+                                        speed=0.0, target_lane_index=lane_index, target_speed=20.0)
+    car.simrig_id = 999
+    car.plan_route_to("main_end")
+    car.route[0] = (*lane_index[:2], None)  # as a car arriving from the ramp has it: no lane of the road pinned
+    road.vehicles.append(car)
+    merged_at, crashed = None, False
+    for frame in range(1, 150):
+        state = world.step()
+        crashed |= any(999 in (c.first, c.second) for c in state.collisions)
+        if car not in road.vehicles:
+            break
+        if merged_at is None and car.lane_index[2] < lanes:
+            merged_at = frame
+    world.close()
+    assert not crashed
+    assert merged_at is not None and merged_at <= 80  # in the main lane within 8 s of standing still

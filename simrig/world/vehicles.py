@@ -16,6 +16,7 @@ import numpy as np
 from highway_env import utils
 from highway_env.road.lane import StraightLane
 from highway_env.vehicle.behavior import IDMVehicle
+from highway_env.vehicle.objects import Obstacle
 
 from ..classes import CLASS_SPECS
 from ..types import ActorClass
@@ -38,6 +39,8 @@ YAW_RATE_MAX = np.deg2rad(30.0)
 """[rad/s] the most yaw rate steering adds at walking speeds, where the lateral-acceleration bound allows more."""
 CURVATURE_STEP_M = 1.0
 """[m] the step along the lane over which its curvature is taken (heading change / distance)."""
+LANE_END_M = 30.0
+"""[m] a vehicle whose lane ends closer than this ahead of it (a fixed obstacle) may merge from a standstill."""
 CURVE_LATERAL_ACCELERATION_MPS2 = 3.0
 """[m/s²] the lateral acceleration a vehicle takes a curve at, at most: it slows to √(a / κ) for the sharpest
 curvature κ ahead. About the side friction AASHTO's Green Book designs low-speed urban curves for (f ≈ 0.27–0.32
@@ -79,6 +82,41 @@ class SimrigVehicle(IDMVehicle):
         another step at constant velocity: its flag then means what the geometric check means — the footprints
         touch or overlap at the end of a simulation step (:mod:`simrig.world.collisions`)."""
         super().handle_collisions(other, 0.0)
+
+    def change_lane_policy(self) -> None:
+        """highway-env's MOBIL, and also from a standstill in a lane that ends: highway-env asks MOBIL only above
+        1 m/s, so a ramp vehicle stopped at the end of its acceleration lane waited there for good. Stopped behind
+        the end of its lane (:meth:`blocked_by_lane_end`), it asks MOBIL for a side lane every
+        ``LANE_CHANGE_DELAY``, and takes the first that is safe (MOBIL's braking imposed on the new follower) —
+        merging from a standstill into a gap, as a driver at the end of a ramp does."""
+        if self.lane_index != self.target_lane_index or abs(self.speed) >= 1.0 or not self.blocked_by_lane_end():
+            super().change_lane_policy()
+            return
+        if not utils.do_every(self.LANE_CHANGE_DELAY, self.timer):
+            return
+        self.timer = 0
+        network = self.road.network
+        for lane_index in network.side_lanes(self.lane_index):
+            if network.get_lane(lane_index).is_reachable_from(self.position) and self.mobil(lane_index):
+                self.target_lane_index = lane_index
+                return
+
+    def blocked_by_lane_end(self) -> bool:
+        """Whether the nearest thing ahead in the vehicle's own lane is a fixed obstacle (the end of a ramp's
+        acceleration lane) within :data:`LANE_END_M`."""
+        front, _ = self.road.neighbour_vehicles(self, self.lane_index)
+        return isinstance(front, Obstacle) and self.lane_distance_to(front) < LANE_END_M
+
+    def act(self, action=None) -> None:
+        """highway-env's IDM + MOBIL; while merging away from the end of its lane, the acceleration is IDM's in the
+        lane it merges into alone (highway-env also brakes for the current lane's front, which holds a vehicle
+        merging from behind a lane end still)."""
+        super().act(action)
+        if self.lane_index == self.target_lane_index or self.crashed or not self.blocked_by_lane_end():
+            return
+        front, rear = self.road.neighbour_vehicles(self, self.target_lane_index)
+        target = self.acceleration(ego_vehicle=self, front_vehicle=front, rear_vehicle=rear)
+        self.action["acceleration"] = float(np.clip(target, -self.ACC_MAX, self.ACC_MAX))
 
     def acceleration(self, ego_vehicle, front_vehicle=None, rear_vehicle=None) -> float:
         """highway-env's IDM acceleration [m/s²], and for one of simrig's vehicles no more than what reaches each
