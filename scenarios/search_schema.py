@@ -41,19 +41,17 @@ are made by :func:`simrig.search.space.load_space`, which every error passes thr
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from pydantic import Field, model_validator
 
+from . import MAX_SEQUENCES, SPACES_DIR, space_catalog  # noqa: F401  (homed in the package: --help reads them)
 from .base import FiniteFloat, PathName, Strict
 
 Number = int | FiniteFloat
 BASE_PATH = "base"
 """A dimension with this path chooses the base scenario itself (``simrig generate --space`` only): its choices
 are catalog names or ``.toml`` files beside the space file; ``base_settings`` apply to each."""
-SPACES_DIR = Path(__file__).resolve().parent / "spaces"
-"""The catalog of search spaces: ``scenarios/spaces/<name>.toml``."""
 
 
 class Failure(Strict):
@@ -203,12 +201,6 @@ class SearchSpaceConfig(SpaceConfig):
     confirm_seeds: Annotated[int, Field(ge=1, le=1000)] = 5
 
 
-MAX_SEQUENCES = 1_000_000
-"""The most sequences ``simrig generate --space`` samples into one collection (six-digit sequence folders)."""
 SEARCH_ONLY_KEYS = tuple(key for key in SearchSpaceConfig.model_fields if key not in SpaceConfig.model_fields)
 """Keys of a space file only a search uses (the tracker, the objective, the budget, ...)."""
 
-
-def space_catalog() -> dict[str, Path]:
-    """Named search spaces (``simrig search NAME``) by name, sorted by name."""
-    return {path.stem: path for path in sorted(SPACES_DIR.glob("*.toml"))}

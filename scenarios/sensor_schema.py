@@ -158,9 +158,10 @@ class EmbeddingConfig(Strict):
     by every vehicle of its class and colour (``lookalike_weight``) and with a view vector that turns smoothly
     with the direction it is seen from (``viewpoint_weight``, ``viewpoint_scale_deg``); plus two drifts with
     memory per actor, the same for every camera at one instant (Ornstein–Uhlenbeck processes: a fast one for pose
-    and lighting, a slow one for lasting change of look), and white noise per observation, renormalised. The white noise vector has norm ≈ σ = (sigma +
-    occlusion_sigma · occlusion + truncation_sigma · truncation) · (1 + d / distance_scale_m); the drifts have
-    norms ≈ ``drift_sigma`` and ``slow_drift_sigma`` (same growth factors). An actor seen again after g frames
+    and lighting, a slow one for lasting change of look), and white noise per observation, renormalised. The
+    white noise vector has norm ≈ σ = (sigma + occlusion_sigma · occlusion + truncation_sigma · truncation) ·
+    (1 + d / distance_scale_m); the drifts have norms ≈ ``drift_sigma`` and ``slow_drift_sigma`` (same growth
+    factors). An actor seen again after g frames
     keeps a share exp(−g·Δt / τ) of each drift, so it looks less like itself the longer the gap.
 
     With ``target_auc`` set, ``sigma`` is not a setting but solved for: the ROC AUC of cosine distance

@@ -67,7 +67,7 @@ def _output(path: Path | None, what: str, *, inputs=(), folder: bool = True) -> 
 def _register_generate(commands) -> None:
     """``simrig generate``'s options."""
     from simrig.benchmark.engine_names import ENGINES
-    from simrig.scenarios.search_schema import MAX_SEQUENCES, space_catalog
+    from simrig.scenarios import MAX_SEQUENCES, space_catalog
 
     gen = commands.add_parser("generate", help="generate a dataset from a scenario, or a collection from a space")
     _scenario_arguments(gen, default=None)

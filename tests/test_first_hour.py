@@ -384,3 +384,21 @@ def test_a_run_folder_given_for_a_dataset_is_named_as_such(small_dataset, tmp_pa
     error = capsys.readouterr().err.strip()
     assert error.endswith(f"it looks like a 'simrig run' folder: its dataset is {str(run / 'dataset')!r}")
     assert len(error.splitlines()) == 1
+
+
+def test_the_help_of_simrig_and_of_every_command_imports_nothing_heavy():
+    """``simrig --help`` and ``simrig COMMAND --help`` build the parser without numpy, pyarrow, pydantic, pandas,
+    scipy, matplotlib or a tracker (the parser of ``detector`` imported the dataset reader, and ``generate``'s the
+    search-space schema: 0.5 s for the help; ~0.05 s without them)."""
+    code = ("import contextlib, io, sys\nfrom simrig.cli import build_parser\nparser = build_parser()\n"
+            "names = [a for a in parser._subparsers._group_actions[0].choices]\n"
+            "for argv in [['--help']] + [[name, '--help'] for name in names]:\n"
+            "    with contextlib.redirect_stdout(io.StringIO()), contextlib.suppress(SystemExit):\n"
+            "        parser.parse_args(argv)\n"
+            "heavy = ('numpy', 'pyarrow', 'pydantic', 'pandas', 'scipy', 'matplotlib', 'filterpy', 'simrig.trackers')\n"
+            "print(len(names), sorted({m.split('.')[0] if not m.startswith('simrig') else m for m in sys.modules\n"
+            "                          if m.startswith(heavy)}))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    count, loaded = done.stdout.strip().split(" ", 1)
+    assert int(count) >= 15 and loaded == "[]"

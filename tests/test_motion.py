@@ -116,9 +116,8 @@ def test_a_car_stopped_at_the_end_of_its_acceleration_lane_merges_when_the_lane_
     """``merge_surround6``'s road with no traffic but the ego: a car standing 8 m behind the end of an acceleration
     lane (highway-env asks MOBIL only above 1 m/s, so it used to wait there for good) moves into the free lane
     beside it within a few seconds, and hits nothing."""
-    from simrig.world.vehicles import VEHICLE_TYPES
-
     from simrig.types import ActorClass
+    from simrig.world.vehicles import VEHICLE_TYPES
 
     scenario = with_setting(with_setting(load_scenario("merge_surround6"), "render.visibility", False),
                             "traffic.vehicles", 0)

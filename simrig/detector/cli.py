@@ -5,8 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..dataset.outputs import write_text_atomic
-
 
 def _file_output(path: Path, what: str, inputs) -> None:
     """``path`` checked as a file output before any work; a symbolic link is refused (no write follows one)."""
@@ -22,6 +20,7 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     import json
     from dataclasses import asdict
 
+    from ..dataset.outputs import write_text_atomic
     from .measure import measure, pooled_reid
     from .reid import format_table
 

@@ -285,8 +285,8 @@ def format_table(rows: list[ReidRow]) -> str:
     lines = [
         "re-ID distance d = 0.5·(1 − cos); share of pairs at d ≤ 0.20 / 0.25; source: FastReID SBS50 on MOT17 val "
         "(pedestrians)",
-        "gap [frames]             pairs same/diff   same≤.20 same≤.25  diff≤.20 diff≤.25    AUC  median same/diff | source: "
-        "same≤.20 diff≤.20    AUC",
+        "gap [frames]             pairs same/diff   same≤.20 same≤.25  diff≤.20 diff≤.25    AUC  median same/diff "
+        "| source: same≤.20 diff≤.20    AUC",
     ]
     for row in rows:
         source = SOURCE.get(row.gaps)

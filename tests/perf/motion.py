@@ -123,7 +123,7 @@ def _summary(results: list[dict]) -> dict:
         for group in ("ego", "others"):
             values = {key: np.array([v for r in mine for v in r[group][key]]) for key in mine[0][group]}
 
-            def pct(key: str, q: float) -> float | None:
+            def pct(key: str, q: float, values: dict = values) -> float | None:
                 return float(np.percentile(values[key], q)) if len(values[key]) else None
 
             summary[name][group] = {
