@@ -20,10 +20,8 @@ Records a tracker works with (:mod:`simrig.types`; frames and units are document
 :class:`PerCameraTracking`, which makes a rig-level tracker of any single-camera 2D tracker.
 """
 
-from __future__ import annotations
-
-import importlib
-from typing import TYPE_CHECKING
+import importlib as _importlib
+import typing as _typing
 
 from simrig.version import __version__
 
@@ -69,16 +67,17 @@ def __getattr__(name: str):
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module 'simrig' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
+    value = getattr(_importlib.import_module(module), name)
     globals()[name] = value
     return value
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+    """What ``dir(simrig)`` and completion show: the public names (:data:`__all__`)."""
+    return sorted(__all__)
 
 
-if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
+if _typing.TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
     from simrig.api import bench, generate, load_scenario, open_dataset, run, score, track
     from simrig.errors import SimrigError
     from simrig.trackers.camera_tracking import CameraTracker, LocalTrack, PerCameraTracking
@@ -96,3 +95,5 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
         SensorFrame,
         Track,
     )
+
+globals().pop("version", None)  # the submodule simrig.version, bound by the import above: __version__ is the name

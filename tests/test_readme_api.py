@@ -55,3 +55,17 @@ def test_import_simrig_loads_nothing_heavy_and_exports_what_all_says() -> None:
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.splitlines() == ["[]", "[]"]
+
+
+def test_python_m_simrig_is_the_simrig_command_and_dir_shows_the_public_names() -> None:
+    done = subprocess.run([sys.executable, "-m", "simrig", "--version"], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and done.stdout.startswith(f"simrig {simrig_version()} "), done.stderr[-2000:]
+    code = ("import simrig\nprint(sorted(n for n in dir(simrig) if not n.startswith('__'))"
+            " == sorted(set(simrig.__all__) - {'__version__'}))")
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip() == "True"
+
+
+def simrig_version() -> str:
+    from simrig.version import __version__
+
+    return __version__
