@@ -214,7 +214,7 @@ def test_the_layer_map_in_the_docs_is_the_tests() -> None:
     for (layer, paragraph), prefixes in zip(documented, LAYERS.values(), strict=True):
         for prefix in prefixes:
             if prefix not in known:
-                continue  # a name the map reserves (simrig.__main__) for a module not written
+                continue  # a name the map reserves for a module not written
             last = prefix.rpartition(".")[2]
             tokens = (f"{last}.py", f"{last}/", prefix, f"`{prefix}`")
             if prefix == "simrig":
