@@ -149,7 +149,7 @@ def _cmd_generate(args: argparse.Namespace) -> int:
 
     from .dataset import Dataset
 
-    args.scenario = args.scenario or DEFAULT_SCENARIO
+    args.scenario = DEFAULT_SCENARIO if args.scenario is None else args.scenario
     with _naming_scenario_file(args.scenario):
         scenario = load_scenario(args.scenario)
         result = generate(
@@ -833,9 +833,17 @@ def _trust_argument(parser: argparse.ArgumentParser, what: str) -> None:
                         "name registered trackers)")
 
 
+def _scenario_name(text: str) -> str:
+    """A scenario argument: an empty one is a mistake, not a request for the default."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty scenario name; give a catalog name (simrig scenarios) or a .toml "
+                                         f"file, or leave it out for {DEFAULT_SCENARIO}")
+    return text
+
+
 def _scenario_arguments(parser: argparse.ArgumentParser, default: str | None = DEFAULT_SCENARIO) -> None:
     """The scenario (``default`` when omitted; ``None``: the command decides), ``--seed`` and ``--frames``."""
-    parser.add_argument("scenario", nargs="?", default=default,
+    parser.add_argument("scenario", nargs="?", default=default, type=_scenario_name,
                         help=f"catalog name or .toml file (default: {DEFAULT_SCENARIO})")
     parser.add_argument("--seed", type=_int_at_least(0), default=0, help="scenario seed (default 0)")
     parser.add_argument("--frames", type=_int_at_least(1, MAX_FRAMES), default=None,
@@ -862,6 +870,10 @@ def main(argv: list[str] | None = None) -> int:
                 print("simrig: interrupted (a generation in progress leaves no dataset behind)", file=sys.stderr)
                 return 130
             if isinstance(error, (SimrigError, ScenarioError)):
+                if os.environ.get("SIMRIG_TRACEBACK") == "1" and error.__cause__ is not None:
+                    import traceback
+
+                    traceback.print_exception(error.__cause__, file=sys.stderr)
                 print(f"simrig: error: {_one_line(str(error))}", file=sys.stderr)
                 return 2
             if isinstance(error, BrokenPipeError):  # the reader left early: console() leaves quietly

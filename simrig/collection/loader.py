@@ -32,10 +32,14 @@ class CollectionPairs:
     def __init__(self, folder: str | Path, *, sequences: Iterable[int] | None = None,
                  prefilter_m: float = PREFILTER_M):
         self.folder = Path(folder)
+        if self.folder.is_file():
+            within = (f"; the collection is its folder, {self.folder.parent}"
+                      if (self.folder.parent / COLLECTION_FILE).is_file() else "")
+            raise DatasetError(f"{str(self.folder)!r} is a file, not a collection folder{within}")
         description = self.folder / COLLECTION_FILE
         try:
             complete = json.loads(read_capped(description, "collection file", DatasetError)).get("complete")
-        except FileNotFoundError:
+        except (FileNotFoundError, NotADirectoryError):
             raise DatasetError(f"{str(self.folder)!r}: not a collection (no {COLLECTION_FILE})") from None
         except (ValueError, AttributeError) as error:
             raise DatasetError(f"{description}: not a collection file ({error})") from None

@@ -247,6 +247,9 @@ def _dataset(run_dir: Path) -> Dataset:
         raise ExplainError(f"{str(run_dir)!r} is a file; give the folder of a 'simrig run'")
     if not run_dir.is_dir():
         raise ExplainError(f"run folder {str(run_dir)!r} does not exist")
+    if run_dir.name in (DATASET_DIR, TRACKS_DIR) and (run_dir.parent / DATASET_DIR).is_dir():
+        raise ExplainError(f"{run_dir} is the {run_dir.name} folder of a run; give the run folder itself: "
+                           f"simrig explain {run_dir.parent}")
     try:
         return Dataset.open(run_dir / DATASET_DIR)
     except SimrigError as error:
@@ -261,10 +264,10 @@ def _label(run_dir: Path, label: str | None) -> str:
     if label is None:
         if len(labels) > 1:
             raise ExplainError(f"{tracks}: holds {len(labels)} tracker runs ({', '.join(labels)}); choose one "
-                               "with --label")
+                               "with --tracker")
         return labels[0]
     if label not in labels:
-        raise ExplainError(f"--label {label!r}: {tracks} holds {', '.join(labels)}")
+        raise ExplainError(f"--tracker {label!r}: {tracks} holds {', '.join(labels)}")
     return label
 
 

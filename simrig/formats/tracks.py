@@ -17,6 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from simrig.dataset.ground_truth import project_tracks, relative_to_true_ego
+from simrig.dataset.run_folder import SCORES_DIR, TRACKS_DIR
 from simrig.dataset.tracks_file import TRACKS2D_FILE, TRACKS3D_FILE, TrackRows, TrackSet, read_tracks, tracks_in_memory
 from simrig.errors import TracksError
 from simrig.formats import OUTSIDE_FORMATS
@@ -29,8 +30,27 @@ from simrig.reading import check_regular, open_regular
 FORMATS = ("simrig", *OUTSIDE_FORMATS)
 
 
+def not_tracks(path: Path) -> str | None:
+    """What ``path`` is when it is a part of a run folder other than tracks, said with where the tracks are (a
+    score report, a folder of several trackers' tracks); None otherwise."""
+    if path.is_file() and path.parent.parent.name == SCORES_DIR:
+        tracks = path.parent.parent.parent / TRACKS_DIR / path.parent.name
+        return (f"{path} is a score report of a run folder, not tracks; the tracks it scored are in {tracks}")
+    if path.is_dir() and not any((path / name).exists() for name in (TRACKS3D_FILE, TRACKS2D_FILE)):
+        labels = sorted(child.name for child in path.iterdir()
+                        if child.is_dir() and any((child / name).is_file() for name in (TRACKS3D_FILE, TRACKS2D_FILE)))
+        if labels:
+            shown = ", ".join(labels[:8]) + (", …" if len(labels) > 8 else "")
+            return (f"{path} holds the tracks of {len(labels)} trackers ({shown}); name one, e.g. "
+                    f"{path / labels[0]}")
+    return None
+
+
 def detect_format(path: Path, cameras: tuple[str, ...]) -> str:
     """The format of the tracks at ``path`` (see the module's rules); an error when none fits."""
+    wrong = not_tracks(path)
+    if wrong is not None:
+        raise TracksError(wrong)
     if path.is_file():
         if path.suffix == ".json":
             return "nuscenes"

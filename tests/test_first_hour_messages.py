@@ -1,0 +1,94 @@
+"""Messages a tracker author met in the first hour that pointed the wrong way (each reproduced before its fix): a
+score report or a folder of trackers given as tracks, a part of a run folder given to explain, a collection's index
+file given as the collection, a crashing tracker with no place named, an empty scenario name."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from simrig.cli import main
+
+
+@pytest.fixture(scope="module")
+def run_folder(tmp_path_factory):
+    """A ``simrig run`` folder with two trackers run into it (5 frames of ``highway_stereo``)."""
+    folder = tmp_path_factory.mktemp("first-hour") / "run"
+    for tracker in ("sort", "deepsort"):
+        assert main(["run", "highway_stereo", "--frames", "5", "--tracker", tracker, "--out", str(folder),
+                     "--quiet"]) == 0
+    return folder
+
+
+def _error(capsys, argv: list[str]) -> str:
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("simrig: error: ") and err.count("\n") == 1, err
+    return err
+
+
+def test_a_score_report_given_as_tracks_says_so_and_where_the_tracks_are(run_folder, capsys):
+    err = _error(capsys, ["score", str(run_folder / "dataset"), str(run_folder / "scores" / "sort" / "score.json")])
+    assert "is a score report of a run folder, not tracks" in err and str(run_folder / "tracks" / "sort") in err
+    assert "results" not in err  # not the nuScenes reader's complaint
+
+
+def test_a_folder_of_several_trackers_lists_them(run_folder, capsys):
+    err = _error(capsys, ["score", str(run_folder / "dataset"), str(run_folder / "tracks")])
+    assert "holds the tracks of 2 trackers (deepsort, sort)" in err and "--format" not in err
+
+
+def test_explain_points_from_a_part_of_the_run_folder_to_the_folder_and_names_the_option_it_shows(run_folder,
+                                                                                                   capsys):
+    err = _error(capsys, ["explain", str(run_folder / "dataset"), "--tracker", "sort"])
+    assert f"give the run folder itself: simrig explain {run_folder}" in err and "dataset/dataset" not in err
+    err = _error(capsys, ["explain", str(run_folder), "--tracker", "sortt"])
+    assert "--tracker 'sortt'" in err and "deepsort, sort" in err and "--label" not in err
+
+
+def test_a_collections_index_file_is_not_taken_for_the_collection(tmp_path):
+    from simrig.collection.loader import CollectionPairs
+    from simrig.collection.run import COLLECTION_FILE, INDEX_FILE
+    from simrig.errors import DatasetError
+
+    (tmp_path / COLLECTION_FILE).write_text("{}")
+    (tmp_path / INDEX_FILE).write_bytes(b"")
+    with pytest.raises(DatasetError, match=r"is a file, not a collection folder; the collection is its folder"):
+        CollectionPairs(tmp_path / INDEX_FILE)
+
+
+def test_a_crashing_tracker_names_the_file_and_line_and_shows_the_traceback_on_request(tmp_path):
+    (tmp_path / "crashy.py").write_text(textwrap.dedent("""\
+        class Crashy:
+            def reset(self, *, rig, seed=None):
+                self.count = 0
+
+            def step(self, frame):
+                return [1 / self.count]
+        """))
+    argv = [sys.executable, "-m", "simrig", "run", "highway_stereo", "--frames", "3", "--tracker", "crashy:Crashy",
+            "--out", "run", "--quiet"]
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    env.pop("SIMRIG_TRACEBACK", None)
+    done = subprocess.run(argv, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
+    where = f"{tmp_path / 'crashy.py'}:6 in step"
+    assert done.returncode == 2 and f"ZeroDivisionError: division by zero (at {where};" in done.stderr
+    assert "Traceback" not in done.stderr and "SIMRIG_TRACEBACK=1 shows the whole traceback" in done.stderr
+    shown = subprocess.run([*argv[:-3], "--out", "run2", "--quiet"], cwd=tmp_path,
+                           env={**env, "SIMRIG_TRACEBACK": "1"}, capture_output=True, text=True, timeout=300)
+    assert "Traceback (most recent call last)" in shown.stderr and "return [1 / self.count]" in shown.stderr
+    assert shown.stderr.rstrip().splitlines()[-1].startswith("simrig: error: ")
+
+
+@pytest.mark.parametrize("command", ["generate", "run", "drive"])
+def test_an_empty_scenario_name_is_an_error_not_the_default_scenario(command, tmp_path, capsys):
+    assert not Path(tmp_path / "out").exists()
+    with pytest.raises(SystemExit) as stop:
+        main([command, "", "--out", str(tmp_path / "out")])
+    assert stop.value.code == 2 and "an empty scenario name" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
