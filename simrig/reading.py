@@ -20,6 +20,10 @@ MAX_DATA_FILE_BYTES = 8 * 2**20
 simrig reads (the shipped ones are under 20 KiB)."""
 
 
+READ_CHUNK_BYTES = 2**20
+"""[bytes] what a capped read asks the file for at a time."""
+
+
 class UnreadableFileError(SimrigError):
     """A file is not a regular file, or is larger than a data file may be; the message names it."""
 
@@ -58,8 +62,32 @@ def read_capped(path: Path | str, what: str, error: type[Exception] = Unreadable
                 max_bytes: int = MAX_DATA_FILE_BYTES) -> bytes:
     """The bytes of the regular file ``path``, or ``error`` when it is not one or holds more than
     ``max_bytes``."""
+    data = bytearray()
     with open_regular(path, what, error) as handle:
-        data = handle.read(max_bytes + 1)
+        while len(data) <= max_bytes:  # by chunks: read(max_bytes + 1) reserves all of it up front, which a
+            chunk = handle.read(min(READ_CHUNK_BYTES, max_bytes + 1 - len(data)))  # memory limit refuses
+            if not chunk:
+                break
+            data += chunk
     if len(data) > max_bytes:
         raise error(f"{what} {str(path)!r} is larger than {max_bytes / 2**20:g} MiB, more than a {what} may be")
-    return data
+    return bytes(data)
+
+
+def read_json(path: Path | str, what: str, error: type[Exception] = UnreadableFileError,
+              max_bytes: int = MAX_DATA_FILE_BYTES):
+    """The JSON document in the regular file ``path`` (:func:`read_capped`), or ``error`` naming ``what`` and the
+    file when it is not UTF-8 JSON, is nested too deeply, or holds NaN or Infinity (not JSON, though Python's
+    reader takes them, and nothing simrig writes holds them). A missing file is :class:`FileNotFoundError`."""
+    import json
+
+    def not_a_number(constant: str):
+        raise ValueError(f"{constant} is not a JSON number (numbers must be finite)")
+
+    data = read_capped(path, what, error, max_bytes)
+    try:
+        return json.loads(data.decode("utf-8"), parse_constant=not_a_number)
+    except (ValueError, UnicodeDecodeError) as problem:
+        raise error(f"{what} {str(path)!r} is not valid JSON: {problem}") from None
+    except RecursionError:
+        raise error(f"{what} {str(path)!r} is nested too deeply to be read") from None

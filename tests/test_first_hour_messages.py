@@ -92,3 +92,36 @@ def test_an_empty_scenario_name_is_an_error_not_the_default_scenario(command, tm
         main([command, "", "--out", str(tmp_path / "out")])
     assert stop.value.code == 2 and "an empty scenario name" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_valid_nuscenes_results_file_is_scored_under_a_3_gib_address_space_limit(small_dataset, saga_tracks,
+                                                                                    tmp_path):
+    """Containers and CI runners cap the address space: reading a results file asked the OS for the whole 2 GiB
+    cap up front (``read(max + 1)``), a MemoryError for any file, valid ones included."""
+    import resource
+
+    assert main(["export", str(small_dataset.path), "--tracks", str(saga_tracks), "--format", "nuscenes", "--out",
+                 str(tmp_path / "export")]) == 0
+    results = next(path for path in (tmp_path / "export").glob("*.json") if path.stem == saga_tracks.name)
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (3 * 2**30, 3 * 2**30))
+
+    done = subprocess.run([sys.executable, "-m", "simrig", "score", str(small_dataset.path), str(results)],
+                          preexec_fn=limit, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "AMOTA" in done.stdout
+
+
+def test_nan_in_a_manifest_or_a_tracker_record_is_named_in_one_line(run_folder, tmp_path, capsys):
+    import shutil
+
+    copy = shutil.copytree(run_folder, tmp_path / "run")
+    record = copy / "tracks" / "sort" / "tracker.json"
+    record.write_text(record.read_text().replace('"params": {}', '"params": {"max_age": NaN}'))
+    err = _error(capsys, ["explain", str(copy), "--tracker", "sort"])
+    assert f"tracker.json {str(record)!r} is not valid JSON: NaN is not a JSON number" in err
+    manifest = copy / "dataset" / "manifest.json"
+    manifest.write_text(manifest.read_text().replace('"frame_rate_hz": 10.0', '"frame_rate_hz": NaN'))
+    err = _error(capsys, ["info", str(copy / "dataset")])
+    assert f"manifest {str(manifest)!r} is not valid JSON: NaN is not a JSON number" in err

@@ -21,7 +21,7 @@ from pathlib import Path
 from simrig.version import __version__
 
 from ..errors import DatasetError
-from ..reading import open_regular, read_capped
+from ..reading import open_regular, read_capped, read_json
 from .outputs import write_text_atomic
 
 MANIFEST_NAME = "manifest.json"
@@ -130,13 +130,9 @@ def read_manifest(folder: Path) -> dict | None:
     """The manifest of ``folder`` if it exists and says ``complete: true``; ``None`` otherwise."""
     path = folder / MANIFEST_NAME
     try:
-        manifest = json.loads(read_capped(path, "manifest", DatasetError).decode("utf-8"))
+        manifest = read_json(path, "manifest", DatasetError)
     except FileNotFoundError:
         return None
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise DatasetError(f"{path}: manifest is not valid JSON ({error})") from None
-    except RecursionError:
-        raise DatasetError(f"{path}: manifest is nested too deeply to be one") from None
     if not isinstance(manifest, dict) or manifest.get("complete") is not True:
         return None
     if manifest.get("format") != FORMAT_NAME:

@@ -15,7 +15,6 @@ Writes ``RUN_DIR/explain/LABEL/``: ``explain.json``, ``explain.md`` (the table a
 
 from __future__ import annotations
 
-import json
 import shlex
 import time
 from dataclasses import dataclass
@@ -34,7 +33,7 @@ from simrig.errors import SimrigError
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
 from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
-from simrig.reading import read_capped
+from simrig.reading import read_json
 from simrig.scenarios.schema import scenario_from_record
 from simrig.scoring.attribution import KINDS
 from simrig.scoring.planner import PLANNER_METRICS
@@ -276,7 +275,7 @@ def _tracker_record(run_dir: Path, label: str, trust_file: bool = False) -> dict
     it names a ``module:attribute`` and the folder is not trusted (nothing is imported then)."""
     path = run_dir / TRACKS_DIR / label / TRACKER_RECORD
     try:
-        record = json.loads(read_capped(path, TRACKER_RECORD, ExplainError))
+        record = read_json(path, TRACKER_RECORD, ExplainError)
         tracker, params, camera = record["tracker"], record["params"], record["camera"]
         if not isinstance(tracker, str) or not isinstance(params, dict):
             raise TypeError("tracker must be a name, params a table")
