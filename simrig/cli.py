@@ -910,14 +910,16 @@ def console() -> None:
     teardown."""
     try:
         code = main()
-        sys.stdout.flush()
+        if sys.stdout is not None:  # None when the command was started with its output closed (simrig info >&-)
+            sys.stdout.flush()
     except BrokenPipeError:  # the reader left early (`simrig scenarios | head`): not an error of simrig's
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit's flush
         code = 1
     scene = sys.modules.get("simrig.render.scene")
     if scene is not None and scene.offscreen_renderer.cache_info().currsize:
-        sys.stdout.flush()
-        sys.stderr.flush()
+        for stream in (sys.stdout, sys.stderr):
+            if stream is not None:
+                stream.flush()
         os._exit(code)
     sys.exit(code)
 

@@ -125,3 +125,28 @@ def test_nan_in_a_manifest_or_a_tracker_record_is_named_in_one_line(run_folder, 
     manifest.write_text(manifest.read_text().replace('"frame_rate_hz": 10.0', '"frame_rate_hz": NaN'))
     err = _error(capsys, ["info", str(copy / "dataset")])
     assert f"manifest {str(manifest)!r} is not valid JSON: NaN is not a JSON number" in err
+
+
+@pytest.mark.parametrize(("source", "said"), [
+    ("def f(:\n", "importing bad_module raised SyntaxError: invalid syntax"),
+    ("raise RuntimeError('boom')\n", "importing bad_module raised RuntimeError: boom"),
+    ("import sys\nsys.exit(0)\n", "importing bad_module raised SystemExit: 0"),
+])
+def test_a_tracker_module_that_fails_on_import_is_one_line_naming_file_and_line(source, said, tmp_path):
+    (tmp_path / "bad_module.py").write_text(source)
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    env.pop("SIMRIG_TRACEBACK", None)
+    done = subprocess.run([sys.executable, "-m", "simrig", "run", "highway_stereo", "--frames", "2", "--tracker",
+                           "bad_module:T", "--out", "run", "--quiet"], cwd=tmp_path, env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr[-2000:]  # exit(0) on import: not 0
+    assert said in done.stderr and f"(at {tmp_path / 'bad_module.py'}:" in done.stderr
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_relative_module_name_and_a_closed_output_are_one_line_or_nothing(capsys, small_dataset):
+    err = _error(capsys, ["run", "highway_stereo", "--frames", "2", "--tracker", "..x:Y", "--out", "unused"])
+    assert "'..x' is a relative module name" in err
+    done = subprocess.run(f"{sys.executable} -m simrig info {small_dataset.path} >&-", shell=True,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and done.stderr == ""

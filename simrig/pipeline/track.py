@@ -7,7 +7,6 @@ the bench and the CLI both come through here, so a user's tracker and the refere
 from __future__ import annotations
 
 import inspect
-import os
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -28,7 +27,7 @@ from simrig.dataset.tracks_file import (
 from simrig.errors import SimrigError
 from simrig.interrupts import stop_if_interrupted
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S, TrackerFault, checked_tracks, time_limit
-from simrig.pipeline.trust import TrackerReferenceError, import_tracker_factory
+from simrig.pipeline.trust import TrackerReferenceError, import_tracker_factory, raised_at
 from simrig.trackers.errors import TrackerInputError
 from simrig.trackers.registry import check_param_types
 from simrig.types import Track
@@ -102,7 +101,7 @@ def _import(spec: str):
     try:
         return import_tracker_factory(spec)
     except TrackerReferenceError as error:
-        raise TrackingError(str(error)) from None
+        raise TrackingError(str(error)) from error.__cause__  # the module's own failure, for SIMRIG_TRACEBACK=1
 
 
 def run_tracker(dataset: Dataset | Path | str, name, out: Path | str | None = None, params: dict | None = None,
@@ -177,25 +176,6 @@ def guarded_call(tracker: str, call: str, seconds: float | None) -> Iterator[Non
     except (Exception, SystemExit) as error:  # SystemExit: the tracker called exit(), which must not end simrig
         raise TrackerFault(f"tracker {tracker!r}: {call} raised {type(error).__name__}: {error}"
                            f"{raised_at(error)}") from error
-
-
-TRACEBACK_VARIABLE = "SIMRIG_TRACEBACK"
-"""Set to 1 to have the command line print the whole traceback of an error raised by a user's code."""
-
-
-def raised_at(error: BaseException) -> str:
-    """`` (at FILE:LINE in FUNCTION; SIMRIG_TRACEBACK=1 shows the whole traceback)``: where in the tracker's code
-    ``error`` was raised — the innermost frame outside simrig and the standard library's own machinery."""
-    import traceback
-
-    import simrig
-
-    ours = tuple(str(Path(package.__file__).parent) + os.sep for package in (simrig, tracker_registry))
-    mine = [f for f in traceback.extract_tb(error.__traceback__) if not f.filename.startswith(ours)]
-    if not mine:
-        return ""
-    where = mine[-1]
-    return f" (at {where.filename}:{where.lineno} in {where.name}; {TRACEBACK_VARIABLE}=1 shows the whole traceback)"
 
 
 def tracker_display(name) -> str:

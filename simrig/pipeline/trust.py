@@ -14,6 +14,7 @@ class with ``reset`` and ``step`` methods, or a Python function whose return ann
 from __future__ import annotations
 
 import inspect
+import os
 import typing
 from pathlib import Path
 
@@ -85,6 +86,9 @@ def import_tracker_factory(spec: str):
     module_name, _, attribute = spec.partition(":")
     if not module_name or not attribute:
         raise TrackerReferenceError(f"tracker {spec!r}: expected module:attribute")
+    if module_name.startswith("."):
+        raise TrackerReferenceError(f"tracker {spec!r}: {module_name!r} is a relative module name; name the module "
+                                    "from the top of its package (package.module:attribute)")
     try:
         target = imported(spec)
     except (ImportError, AttributeError, ValueError) as error:
@@ -93,6 +97,9 @@ def import_tracker_factory(spec: str):
             hint = ("; it is in the current folder, which the simrig command does not search: run with "
                     "PYTHONPATH=. or pip install your package")
         raise TrackerReferenceError(f"tracker {spec!r}: cannot import it ({error}){hint}") from None
+    except (Exception, SystemExit) as error:  # the module's own code failed on import (exit() included)
+        raise TrackerReferenceError(f"tracker {spec!r}: importing {module_name} raised {type(error).__name__}: "
+                                    f"{error}{raised_at(error)}") from error
     if not is_tracker_factory(target):
         kind = type(target).__name__
         raise TrackerReferenceError(
@@ -100,3 +107,26 @@ def import_tracker_factory(spec: str):
             "methods, or a function annotated to return one (-> MyTracker); it was not called"
         )
     return target
+
+
+TRACEBACK_VARIABLE = "SIMRIG_TRACEBACK"
+"""Set to 1 to have the command line print the whole traceback of an error raised by a user's code."""
+
+
+def raised_at(error: BaseException) -> str:
+    """`` (at FILE:LINE in FUNCTION; SIMRIG_TRACEBACK=1 shows the whole traceback)``: where in the tracker's code
+    ``error`` was raised — the innermost frame outside simrig and the standard library's own machinery."""
+    import traceback
+
+    import simrig
+
+    hint = f"{TRACEBACK_VARIABLE}=1 shows the whole traceback"
+    if isinstance(error, SyntaxError) and error.filename:
+        return f" (at {error.filename}:{error.lineno}; {hint})"
+    ours = tuple(str(Path(package.__file__).parent) + os.sep for package in (simrig, tracker_registry))
+    mine = [f for f in traceback.extract_tb(error.__traceback__) if not f.filename.startswith(ours)
+            and not f.filename.startswith("<frozen importlib")]
+    if not mine:
+        return ""
+    where = mine[-1]
+    return f" (at {where.filename}:{where.lineno} in {where.name}; {hint})"
