@@ -486,6 +486,11 @@ def _cmd_trackers(args: argparse.Namespace) -> int:
 
     from simrig import trackers as tracker
 
+    from .installation import ownership_warning
+
+    warning = ownership_warning()
+    if warning:
+        print(warning, file=sys.stderr)
     for name in tracker.available():
         settings = ", ".join(
             f"{key}={value!r}" if value is not inspect.Parameter.empty else key
@@ -805,13 +810,26 @@ def _cmd_search(args: argparse.Namespace) -> int:
     return 0
 
 
+class _VersionAction(argparse.Action):
+    """``--version``: the version, the distribution to pip install, and a warning line when another installed
+    distribution owns files of the simrig package (:mod:`simrig.installation`)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from .installation import ownership_warning
+        from .version import DISTRIBUTION, __version__
+
+        print(f"simrig {__version__} (pip: {DISTRIBUTION})")
+        warning = ownership_warning()
+        if warning:
+            print(warning, file=sys.stderr)
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _OneLineParser(
         prog="simrig", description="A test bench for multi-camera multi-object trackers on moving vehicles."
     )
-    from .version import DISTRIBUTION, __version__
-
-    parser.add_argument("--version", action="version", version=f"simrig {__version__} (pip: {DISTRIBUTION})")
+    parser.add_argument("--version", action=_VersionAction, nargs=0, help="show the version and exit")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     from .detector.cli import add_detector_command
 

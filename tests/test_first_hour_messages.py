@@ -150,3 +150,24 @@ def test_a_relative_module_name_and_a_closed_output_are_one_line_or_nothing(caps
     done = subprocess.run(f"{sys.executable} -m simrig info {small_dataset.path} >&-", shell=True,
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0 and done.stderr == ""
+
+
+def test_another_distribution_owning_files_of_the_simrig_package_is_said_in_one_line(tmp_path):
+    """PyPI's unrelated ``simrig`` (what a plugin declaring ``dependencies = ["simrig"]`` pulls in) writes into the
+    same package folder; ``--version``, ``simrig trackers`` and the pytest plugin's header say so."""
+    info = tmp_path / "simrig-0.5.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: simrig\nVersion: 0.5.0\n")
+    (info / "RECORD").write_text("simrig/__init__.py,,\nsimrig/cli.py,,\nsimrig-0.5.0.dist-info/RECORD,,\n")
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    for argv in (["--version"], ["trackers"]):
+        done = subprocess.run([sys.executable, "-m", "simrig", *argv], env=env, capture_output=True, text=True,
+                              timeout=120)
+        assert done.returncode == 0
+        assert done.stderr.count("\n") == 1 and "simrig 0.5.0 also installed files into the simrig package" in \
+            done.stderr and "depends on 'simrig-mot'" in done.stderr
+    clean = subprocess.run([sys.executable, "-m", "simrig", "--version"], capture_output=True, text=True, timeout=120)
+    assert clean.stderr == ""
+    from simrig.testing.plugin import pytest_report_header
+
+    assert pytest_report_header(None) == []

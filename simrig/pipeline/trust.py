@@ -118,12 +118,10 @@ def raised_at(error: BaseException) -> str:
     ``error`` was raised — the innermost frame outside simrig and the standard library's own machinery."""
     import traceback
 
-    import simrig
-
     hint = f"{TRACEBACK_VARIABLE}=1 shows the whole traceback"
     if isinstance(error, SyntaxError) and error.filename:
         return f" (at {error.filename}:{error.lineno}; {hint})"
-    ours = tuple(str(Path(package.__file__).parent) + os.sep for package in (simrig, tracker_registry))
+    ours = (str(Path(__file__).parents[1]) + os.sep, str(Path(tracker_registry.__file__).parent) + os.sep)
     mine = [f for f in traceback.extract_tb(error.__traceback__) if not f.filename.startswith(ours)
             and not f.filename.startswith("<frozen importlib")]
     if not mine:

@@ -22,6 +22,15 @@ from pathlib import Path
 import pytest
 
 
+def pytest_report_header(config):
+    """A line in pytest's header when another distribution owns files of the simrig package
+    (:mod:`simrig.installation`)."""
+    from simrig.installation import ownership_warning
+
+    warning = ownership_warning()
+    return [warning] if warning else []
+
+
 def pytest_addoption(parser):
     parser.addoption("--simrig-failures", default=None, metavar="DIR",
                      help="where simrig writes replay files of failing tests (default: ROOTDIR/simrig-failures)")
