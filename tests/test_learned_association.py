@@ -75,8 +75,12 @@ def test_the_model_file_round_trips_and_its_probability_is_the_logistic_of_its_t
 @pytest.mark.parametrize("change, message", [
     (lambda d: d.update(format="something else"), "not a simrig association model"),
     (lambda d: d.update(features=["distance_m"]), "features: "),
-    (lambda d: d["coef"].__setitem__(0, float("nan")), "coef: 20 finite numbers"),
-    (lambda d: d.update(scale=[0.0] * 20), "scale: every entry must be positive"),
+    (lambda d: d["coef"].__setitem__(0, float("nan")), r"coef\[0\]: a number in \[-1e\+06, 1e\+06\], got nan"),
+    (lambda d: d.update(scale=[0.0] * 20), r"scale\[0\]: a number in \[1e-09, 1e\+09\], got 0.0"),
+    (lambda d: d["coef"].__setitem__(3, 1e308), r"coef\[3\]: .*got 1e\+308"),  # made inf and NaN log-odds
+    (lambda d: d["scale"].__setitem__(2, 1e-308), r"scale\[2\]: .*got 1e-308"),
+    (lambda d: d.update(coef=list(range(20_000))), "coef: 20 numbers .*got 20000$"),  # not a 376 KB line
+    (lambda d: d.update(trained_on="ab"), "trained_on: a table of what the model was trained on, got 'ab'"),
     (lambda d: d.update(threshold=1.5), r"threshold: in \(0, 1\)"),
     (lambda d: d.pop("intercept"), "intercept: missing"),
 ])

@@ -46,6 +46,17 @@ def design(features: np.ndarray) -> np.ndarray:
     return np.concatenate([features, features * features], axis=-1)
 
 
+BOUNDS: dict[str, tuple[float, float]] = {"mean": (-1e9, 1e9), "scale": (1e-9, 1e9), "coef": (-1e6, 1e6)}
+"""The range of each array of a model file (and of the intercept: ``coef``'s): wide enough for any fitted model,
+narrow enough that the log-odds of any pair stays finite (a coefficient of 1e308 made inf and NaN tracks)."""
+
+
+def _shown(value, limit: int = 60) -> str:
+    """``repr(value)`` cut to ``limit`` characters, for a one-line message."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
 @dataclass(frozen=True)
 class AssociationModel:
     """Standardised logistic regression on :func:`design` of :data:`TRACK_FEATURES` (module docstring)."""
@@ -60,14 +71,18 @@ class AssociationModel:
 
     def __post_init__(self) -> None:
         width = 2 * len(TRACK_FEATURES)
-        for key in ("mean", "scale", "coef"):
+        for key, (low, high) in BOUNDS.items():
             values = getattr(self, key)
-            if len(values) != width or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
-                raise ModelError(f"{key}: {width} finite numbers (each feature, then its square), got {values!r}")
-        if not all(v > 0 for v in self.scale):
-            raise ModelError("scale: every entry must be positive")
-        if not (isinstance(self.intercept, (int, float)) and math.isfinite(self.intercept)):
-            raise ModelError(f"intercept: a finite number, got {self.intercept!r}")
+            if len(values) != width:
+                raise ModelError(f"{key}: {width} numbers (each feature, then its square), got {len(values)}")
+            bad = next((i for i, v in enumerate(values) if not (isinstance(v, (int, float))
+                                                                and not isinstance(v, bool) and low <= v <= high)),
+                       None)
+            if bad is not None:
+                raise ModelError(f"{key}[{bad}]: a number in [{low:g}, {high:g}], got {_shown(values[bad])}")
+        low, high = BOUNDS["coef"]
+        if not (isinstance(self.intercept, (int, float)) and low <= self.intercept <= high):
+            raise ModelError(f"intercept: a number in [{low:g}, {high:g}], got {_shown(self.intercept)}")
         if not 0 < self.threshold < 1:
             raise ModelError(f"threshold: in (0, 1), got {self.threshold!r}")
         if not self.prefilter_m > 0:
@@ -114,10 +129,14 @@ class AssociationModel:
         if document.get("features") != list(TRACK_FEATURES):
             raise ModelError(f"{where}: features: {document.get('features')!r} are not this simrig's "
                              f"{list(TRACK_FEATURES)}")
+        trained_on = document.get("trained_on", {})
+        if not isinstance(trained_on, dict):
+            raise ModelError(f"{where}: trained_on: a table of what the model was trained on, got "
+                             f"{_shown(trained_on)}")
         try:
             return cls(tuple(document["mean"]), tuple(document["scale"]), tuple(document["coef"]),
                        document["intercept"], document.get("threshold", 0.5), document.get("prefilter_m", 10.0),
-                       dict(document.get("trained_on", {})))
+                       dict(trained_on))
         except KeyError as error:
             raise ModelError(f"{where}: {error.args[0]}: missing") from None
         except (TypeError, ModelError) as error:
