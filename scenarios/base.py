@@ -8,9 +8,13 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 from simrig.names import name_problem
 
-PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-NonNegativeFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
-FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+MAX_SETTING = 1e6
+"""The largest magnitude of any real-valued setting, in its own unit (metres, seconds, degrees, m/s, ...): no
+scenario means a million of any of them, and a value like 1e200 was accepted and simulated into overflow. Settings
+with a natural limit of their own have a tighter one."""
+PositiveFloat = Annotated[float, Field(gt=0, le=MAX_SETTING, allow_inf_nan=False)]
+NonNegativeFloat = Annotated[float, Field(ge=0, le=MAX_SETTING, allow_inf_nan=False)]
+FiniteFloat = Annotated[float, Field(ge=-MAX_SETTING, le=MAX_SETTING, allow_inf_nan=False)]
 
 
 def _path_name(name: str) -> str:

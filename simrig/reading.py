@@ -88,6 +88,6 @@ def read_json(path: Path | str, what: str, error: type[Exception] = UnreadableFi
     try:
         return json.loads(data.decode("utf-8"), parse_constant=not_a_number)
     except (ValueError, UnicodeDecodeError) as problem:
-        raise error(f"{what} {str(path)!r} is not valid JSON: {problem}") from None
+        raise error(f"{path}: {what} is not valid JSON ({problem})") from None
     except RecursionError:
-        raise error(f"{what} {str(path)!r} is nested too deeply to be read") from None
+        raise error(f"{path}: {what} is nested too deeply to be one") from None

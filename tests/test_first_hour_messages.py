@@ -120,11 +120,11 @@ def test_nan_in_a_manifest_or_a_tracker_record_is_named_in_one_line(run_folder, 
     record = copy / "tracks" / "sort" / "tracker.json"
     record.write_text(record.read_text().replace('"params": {}', '"params": {"max_age": NaN}'))
     err = _error(capsys, ["explain", str(copy), "--tracker", "sort"])
-    assert f"tracker.json {str(record)!r} is not valid JSON: NaN is not a JSON number" in err
+    assert f"{record}: tracker.json is not valid JSON (NaN is not a JSON number" in err
     manifest = copy / "dataset" / "manifest.json"
     manifest.write_text(manifest.read_text().replace('"frame_rate_hz": 10.0', '"frame_rate_hz": NaN'))
     err = _error(capsys, ["info", str(copy / "dataset")])
-    assert f"manifest {str(manifest)!r} is not valid JSON: NaN is not a JSON number" in err
+    assert f"{manifest}: manifest is not valid JSON (NaN is not a JSON number" in err
 
 
 @pytest.mark.parametrize(("source", "said"), [
@@ -171,3 +171,13 @@ def test_another_distribution_owning_files_of_the_simrig_package_is_said_in_one_
     from simrig.testing.plugin import pytest_report_header
 
     assert pytest_report_header(None) == []
+
+
+@pytest.mark.parametrize("setting", ["sensor.ego_pose.noise_m", "traffic.ego_speed_mps", "sensor.latency.fixed_s"])
+def test_an_absurd_number_in_a_scenario_is_refused_naming_the_key(setting, tmp_path, capsys):
+    """Every real-valued setting is bounded (10⁶ in its unit at most): ``noise_m = 1e200`` was accepted."""
+    table, _, key = setting.rpartition(".")
+    scenario = tmp_path / "absurd.toml"
+    scenario.write_text(f'extends = "highway_stereo"\nname = "absurd"\n[{table}]\n{key} = 1e200\n')
+    err = _error(capsys, ["generate", str(scenario), "--out", str(tmp_path / "out")])
+    assert f"{setting}: Input should be less than or equal to" in err and not (tmp_path / "out").exists()
