@@ -15,15 +15,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from published import command_line, machine, publish
+from published import command_line, machine, publish, seed_range
 
 OUT = Path(__file__).resolve().parents[2] / "reports" / "fidelity" / "cross_view.md"
 SCENARIOS = ("stereo_occluder", "highway_surround6")
-
-
-def _seeds(text: str) -> list[int]:
-    low, _, high = text.partition("-")
-    return list(range(int(low), int(high or low) + 1))
 
 
 def main() -> int:
@@ -38,7 +33,7 @@ def main() -> int:
     parser.add_argument("--seeds", default="100-103")
     parser.add_argument("--frames", type=int, default=200)
     args = parser.parse_args()
-    seeds = _seeds(args.seeds)
+    seeds = seed_range(args.seeds)
     lines = ["# Re-ID across cameras and viewing angles", "",
              f"Produced by `{command_line()}` ({machine()}): each scenario with its catalog detector "
              f"(`bevformer_small`'s re-ID, calibrated by frame gap to FastReID SBS50 on MOT17 val), seeds "

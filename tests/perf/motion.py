@@ -21,7 +21,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from published import command_line, machine, publish
+from published import command_line, machine, publish, seed_range
 
 OUT = Path(__file__).resolve().parents[2] / "reports" / "motion"
 LATERAL_SPEED_MPS = 0.1
@@ -149,9 +149,7 @@ def main() -> int:
     parser.add_argument("--frames", type=int, default=200)
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
-    low, _, high = args.seeds.partition("-")
-    seeds = list(range(int(low), int(high or low) + 1))
-    jobs = [(name, seed, args.frames) for name in sorted(catalog()) for seed in seeds]
+    jobs = [(name, seed, args.frames) for name in sorted(catalog()) for seed in seed_range(args.seeds)]
     with ProcessPoolExecutor(args.workers) as pool:
         results = list(pool.map(_one, jobs))
     store = OUT / "runs.json"

@@ -75,3 +75,13 @@ def publish(lines: list[str], out: Path) -> None:
     out.write_text("\n".join(lines))
     print("\n".join(lines))
     print(f"wrote {out}")
+
+
+def seed_range(text: str) -> list[int]:
+    """The seeds of a ``--seeds`` option: ``100-109`` (inclusive) or one seed.
+
+    >>> seed_range("100-102"), seed_range("7")
+    ([100, 101, 102], [7])
+    """
+    low, _, high = text.partition("-")
+    return list(range(int(low), int(high or low) + 1))

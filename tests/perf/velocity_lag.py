@@ -27,7 +27,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from published import command_line, machine, publish
+from published import command_line, machine, publish, seed_range
 
 OUT = Path(__file__).resolve().parents[2] / "reports" / "velocity_lag" / "index.md"
 TRACKERS = ("global_hungarian", "saga", "simpletrack", "polymot", "mutr3d", "percam_merge")
@@ -130,18 +130,13 @@ EXPLANATION = [
 ]
 
 
-def _seeds(text: str) -> list[int]:
-    low, _, high = text.partition("-")
-    return list(range(int(low), int(high or low) + 1))
-
-
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--work", type=Path, default=Path("runs/velocity-lag"))
     parser.add_argument("--seeds", default="100-109")
     parser.add_argument("--workers", type=int, default=1)
     args = parser.parse_args()
-    seeds = _seeds(args.seeds)
+    seeds = seed_range(args.seeds)
     jobs = [(seed, preset, args.work) for preset in PRESETS for seed in seeds]
     with ProcessPoolExecutor(args.workers) as pool:
         rows = [row for rows in pool.map(_one, jobs) for row in rows]
