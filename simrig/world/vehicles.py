@@ -27,7 +27,8 @@ STEERING_LATERAL_ACCELERATION_MPS2 = 2.0
 """[m/s²] the most lateral acceleration a vehicle's steering adds to what its lane's own curve asks for: lane
 changes and merges stay at or under it (drivers change lanes at 1–2 m/s²; naturalistic highway data such as highD,
 Krajewski et al., ITSC 2018). highway-env's controller (heading time constant 0.2 s, lateral 0.6 s) changed lanes
-in about 1.5 s at up to ~100 °/s and 4.5 g at highway speed."""
+in about 2 s, at up to 134 °/s of yaw for the ego and 225 °/s for other vehicles, and up to 72 m/s² lateral
+(``reports/motion/index.md``)."""
 LATERAL_SPEED_MPS = 1.2
 """[m/s] the fastest a lane change moves sideways (a 4 m lane change then lasts about 5 s, the mean of 4.6 s that
 Toledo and Zohar measured on NGSIM highways, TRR 1999, 2007)."""
