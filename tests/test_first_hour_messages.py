@@ -181,3 +181,47 @@ def test_an_absurd_number_in_a_scenario_is_refused_naming_the_key(setting, tmp_p
     scenario.write_text(f'extends = "highway_stereo"\nname = "absurd"\n[{table}]\n{key} = 1e200\n')
     err = _error(capsys, ["generate", str(scenario), "--out", str(tmp_path / "out")])
     assert f"{setting}: Input should be less than or equal to" in err and not (tmp_path / "out").exists()
+
+
+def test_a_tracker_calling_os_exit_during_a_drive_is_reported_not_a_silent_exit(tmp_path):
+    (tmp_path / "quits.py").write_text(textwrap.dedent("""\
+        import os
+
+        class Quits:
+            def reset(self, *, rig, seed=None):
+                pass
+
+            def step(self, frame):
+                os._exit(3)
+        """))
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    done = subprocess.run([sys.executable, "-m", "simrig", "drive", "lead_brake", "--frames", "5", "--tracker",
+                           "quits:Quits", "--out", "drive", "--quiet"], cwd=tmp_path, env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 2 and "frame 0: step() raised _HardExit: os._exit(3) called" in done.stderr
+
+
+def test_a_non_finite_parameter_is_refused_wherever_it_comes_from(tmp_path):
+    from simrig.pipeline.track import TrackingError, build_tracker
+
+    for value in (float("nan"), float("inf")):
+        with pytest.raises(TrackingError, match=r"tracker 'saga': parameter gamma = (nan|inf): a parameter must be "
+                                                r"a finite number"):
+            build_tracker("saga", {"gamma": value})  # what a suite's or a tracker.json's params reach
+
+
+def test_a_damaged_made_on_record_in_a_tracks_file_is_an_error_not_taken_as_none(small_dataset, sort_tracks,
+                                                                                  tmp_path, capsys):
+    import shutil
+
+    import pyarrow.parquet as pq
+
+    from simrig.dataset.tracks_file import MADE_ON_KEY
+
+    tracks = shutil.copytree(sort_tracks, tmp_path / "tracks")
+    for file in tracks.glob("*.parquet"):
+        table = pq.read_table(file)
+        pq.write_table(table.replace_schema_metadata({**(table.schema.metadata or {}), MADE_ON_KEY: b"{not json"}),
+                       file)
+    err = _error(capsys, ["score", str(small_dataset.path), str(tracks)])
+    assert "simrig.made_on record is damaged" in err and str(tracks) in err

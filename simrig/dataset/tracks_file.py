@@ -167,13 +167,21 @@ def write_tracks(out: Path | str, frames: Iterable[tuple[int, Iterable[Track]]] 
     return out
 
 
-def _made_on(schema: pa.Schema) -> dict | None:
-    """The dataset identity a tracks table's metadata records, or ``None`` (none recorded, or unreadable)."""
-    try:
-        value = json.loads((schema.metadata or {}).get(MADE_ON_KEY, b"null"))
-    except ValueError:
+def _made_on(schema: pa.Schema, where: str = "tracks file") -> dict | None:
+    """The dataset identity a tracks table's metadata records, or ``None`` when it records none; a
+    :class:`TracksError` naming ``where`` when the record is there but damaged (it was taken as none, so tracks
+    of another dataset could be scored without the warning the record exists for)."""
+    raw = (schema.metadata or {}).get(MADE_ON_KEY)
+    if raw is None:
         return None
-    return value if isinstance(value, dict) else None
+    try:
+        value = json.loads(raw)
+    except (ValueError, UnicodeDecodeError) as error:
+        raise TracksError(f"{where}: its {MADE_ON_KEY.decode()} record is damaged ({error}); write the tracks "
+                          "again, or remove the record to score them without it") from None
+    if not isinstance(value, dict):
+        raise TracksError(f"{where}: its {MADE_ON_KEY.decode()} record is not a table of the dataset's identity")
+    return value
 
 
 def tracks_in_memory(tables: dict[str, pa.Table], *, frame_count: int, cameras: tuple[str, ...],
@@ -256,7 +264,8 @@ def _read(file: Path, layout: str, frame_count: int, cameras: tuple[str, ...]) -
         except (pa.ArrowInvalid, OSError) as error:
             raise unreadable(error) from None
 
-    return _rows(file, parquet.schema_arrow.names, column, layout, frame_count, cameras), _made_on(parquet.schema_arrow)
+    rows = _rows(file, parquet.schema_arrow.names, column, layout, frame_count, cameras)
+    return rows, _made_on(parquet.schema_arrow, str(file))
 
 
 def _rows(file: Path | str, names: list[str], column: Callable[[str], pa.ChunkedArray], layout: str,

@@ -7,6 +7,7 @@ the bench and the CLI both come through here, so a user's tracker and the refere
 from __future__ import annotations
 
 import inspect
+import math
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -59,6 +60,10 @@ def build_tracker(name, params: dict | None = None):
     factory or class (called with ``params``) or a tracker object (used as is). A :class:`TrackingError`
     naming the tracker and the bad name or parameter otherwise."""
     params = params or {}
+    for key, value in params.items():  # nan or inf in a suite, a tracker.json or a Python call: never a setting
+        if isinstance(value, float) and not math.isfinite(value):
+            raise TrackingError(f"tracker {tracker_display(name)!r}: parameter {key} = {value}: a parameter must be "
+                                "a finite number")
     if isinstance(name, str) and ":" in name and name not in tracker_registry.available():
         name = _import(name)
     if not isinstance(name, str):
@@ -169,13 +174,38 @@ def guarded_call(tracker: str, call: str, seconds: float | None) -> Iterator[Non
     """The tracker's ``call`` under a time limit; anything it raises (but its own input complaint) becomes a
     :class:`TrackerFault` naming tracker and call, with the original exception chained."""
     try:
-        with time_limit(seconds, f"tracker {tracker!r}: {call}"):
+        with time_limit(seconds, f"tracker {tracker!r}: {call}"), _no_hard_exit():
             yield
     except (TrackerFault, TrackerInputError):
         raise
     except (Exception, SystemExit) as error:  # SystemExit: the tracker called exit(), which must not end simrig
         raise TrackerFault(f"tracker {tracker!r}: {call} raised {type(error).__name__}: {error}"
                            f"{raised_at(error)}") from error
+
+
+class _HardExit(Exception):
+    """The tracker called ``os._exit``: raised in its place, so that simrig reports it and writes nothing partial."""
+
+    def __init__(self, code):
+        super().__init__(f"os._exit({code!r}) called, which would have ended simrig without a word")
+
+
+@contextmanager
+def _no_hard_exit() -> Iterator[None]:
+    """``os._exit`` raises :class:`_HardExit` while a tracker's call runs (it would end the process at once, with
+    no message and no clean-up: ``simrig drive`` exited 3 having said nothing)."""
+    import os
+
+    real = os._exit
+
+    def refuse(code=0):
+        raise _HardExit(code)
+
+    os._exit = refuse
+    try:
+        yield
+    finally:
+        os._exit = real
 
 
 def tracker_display(name) -> str:
