@@ -28,13 +28,16 @@ CATALOG_DIR = Path(__file__).resolve().parent
 SUITES_DIR = CATALOG_DIR / "suites"
 SPACES_DIR = CATALOG_DIR / "spaces"
 """The catalog of search spaces: ``scenarios/spaces/<name>.toml``."""
+MAX_FRAMES = 1_000_000
+"""The most frames one sequence may have (``--frames``, a dataset's manifest)."""
 MAX_SEQUENCES = 1_000_000
 """The most sequences ``simrig generate --space`` samples into one collection (six-digit sequence folders)."""
 DEFAULT_SCENARIO = "highway_surround6"
 _NAMED_MESSAGE = re.compile(r"^([a-z_][a-z0-9_]*(?:\.[A-Za-z0-9_]+)*(?:, [a-z_][a-z0-9_]*)*): (.*)$")
 
-__all__ = ["CATALOG_DIR", "DEFAULT_SCENARIO", "MAX_SEQUENCES", "SPACES_DIR", "SUITES_DIR", "Scenario", "ScenarioError",
-           "catalog", "dimension_labels", "describe_errors", "load_scenario", "space_catalog", "suite_catalog"]
+__all__ = ["CATALOG_DIR", "DEFAULT_SCENARIO", "MAX_FRAMES", "MAX_SEQUENCES", "SPACES_DIR", "SUITES_DIR", "Scenario",
+           "ScenarioError", "catalog", "dimension_labels", "describe_errors", "load_scenario", "space_catalog",
+           "suite_catalog"]
 
 
 class ScenarioError(ValueError):

@@ -108,7 +108,7 @@ class CustomCamera(Strict):
     z_m: FiniteFloat = 1.6
     yaw_deg: FiniteFloat = 0.0
     pitch_deg: Annotated[float, Field(ge=-89, le=89)] = 0.0
-    hfov_deg: Annotated[float, Field(gt=0, lt=179)] = 60.0
+    hfov_deg: Annotated[float, Field(ge=1, lt=179)] = 60.0
     width_px: Annotated[int, Field(ge=16, le=8192)] = 1600
     height_px: Annotated[int, Field(ge=16, le=8192)] = 900
 
@@ -138,7 +138,7 @@ class RigConfig(Strict):
     """[-] cameras in a ring."""
     baseline_m: PositiveFloat = 0.54
     """[m] distance between the stereo pair's optical centres."""
-    hfov_deg: Annotated[float, Field(gt=0, lt=179)] = 81.2
+    hfov_deg: Annotated[float, Field(ge=1, lt=179)] = 81.2
     """[deg] horizontal field of view of each stereo camera (KITTI: 1242 px at f = 721.5 px)."""
     image_width_px: Annotated[int, Field(ge=16, le=8192)] | None = None
     """[px] image width; preset default when omitted (1600 surround/ring, 1242 stereo)."""

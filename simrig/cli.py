@@ -19,12 +19,11 @@ import os  # noqa: E402
 import sys  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from simrig.scenarios import DEFAULT_SCENARIO, ScenarioError, catalog, load_scenario  # noqa: E402
+from simrig.scenarios import DEFAULT_SCENARIO, MAX_FRAMES, ScenarioError, catalog, load_scenario  # noqa: E402
 
 from .errors import SimrigError  # noqa: E402
 from .interrupts import interrupted, noting_interrupts  # noqa: E402
 
-MAX_FRAMES = 1_000_000
 """The most frames a scenario may ask for (``scenarios.schema.Scenario.frames``)."""
 EXPLAIN_MAX_SAMPLES = 10_000
 """The most permutations ``--samples`` / ``--explain-samples`` may ask for (``simrig.explain.api.MAX_SAMPLES``,

@@ -225,3 +225,59 @@ def test_a_damaged_made_on_record_in_a_tracks_file_is_an_error_not_taken_as_none
                        file)
     err = _error(capsys, ["score", str(small_dataset.path), str(tracks)])
     assert "simrig.made_on record is damaged" in err and str(tracks) in err
+
+
+def test_a_symbolic_link_as_an_output_folder_is_refused_and_nothing_moves(tmp_path, capsys):
+    real = tmp_path / "real"
+    real.mkdir()
+    (real / "notes.txt").write_text("mine")
+    link = tmp_path / "link"
+    link.symlink_to(real)
+    for argv in (["generate", "highway_stereo", "--frames", "2", "--out", str(link), "--overwrite"],
+                 ["run", "highway_stereo", "--frames", "2", "--out", str(link)]):
+        err = _error(capsys, argv)
+        assert f"{str(link)!r} is a symbolic link; simrig does not write through links" in err
+    assert link.is_symlink() and sorted(p.name for p in real.iterdir()) == ["notes.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "real"]
+
+
+@pytest.mark.parametrize(("key", "value", "said"), [
+    ("frames", 10**12, "manifest key 'frames' is 1000000000000, more than a sequence may have (1,000,000)"),
+    ("frames", 31, "manifest says 31 frames but its ego_poses table holds 30 rows"),
+    ("frame_rate_hz", 0.0, "manifest key 'frame_rate_hz' must be a number in (0, 1000], got 0.0"),
+    ("frame_rate_hz", "10", "manifest key 'frame_rate_hz' must be a number in (0, 1000], got '10'"),
+])
+def test_a_rehashed_manifest_that_lies_is_refused_in_one_line(key, value, said, small_dataset, tmp_path, capsys):
+    """Anyone can edit a manifest and compute its hash again: what it states is checked against its tables and
+    limits (10¹² frames tried to allocate 7.28 TiB)."""
+    import json
+    import shutil
+
+    from simrig.dataset.manifest import manifest_digest
+
+    copy = shutil.copytree(small_dataset.path, tmp_path / "ds")
+    manifest = json.loads((copy / "manifest.json").read_text())
+    assert manifest["frames"] == 30
+    manifest[key] = value
+    manifest.pop("manifest_sha256")
+    manifest.pop("complete")
+    manifest["manifest_sha256"] = manifest_digest(manifest)
+    manifest["complete"] = True
+    (copy / "manifest.json").write_text(json.dumps(manifest))
+    err = _error(capsys, ["info", str(copy)])
+    assert said in err
+
+
+def test_measure_json_is_strict_json_and_a_one_degree_camera_is_the_narrowest(small_dataset, tmp_path, capsys):
+    import json
+
+    from simrig.scenarios.schema import Scenario
+
+    assert main(["detector", "measure", str(small_dataset.path), "--json", str(tmp_path / "m.json")]) == 0
+
+    def refuse(constant):
+        raise ValueError(constant)
+
+    json.loads((tmp_path / "m.json").read_text(), parse_constant=refuse)  # no NaN: empty bands are null
+    with pytest.raises(ValueError, match=r"hfov_deg\s+Input should be greater than or equal to 1"):
+        Scenario.model_validate({"name": "t", "rig": {"preset": "stereo", "hfov_deg": 1e-300}})

@@ -18,6 +18,7 @@ import re
 from importlib import metadata
 from pathlib import Path
 
+from simrig.scenarios import MAX_FRAMES
 from simrig.version import __version__
 
 from ..errors import DatasetError
@@ -84,6 +85,10 @@ def _plain_name(name: object) -> bool:
             and "\0" not in name)
 
 
+MAX_FRAME_RATE_HZ = 1000.0
+"""[Hz] the highest frame rate a manifest may state (a scenario allows 100 Hz; imported sequences run slower)."""
+
+
 def _check_manifest(path: Path, manifest: dict) -> None:
     """Refuse a complete manifest that was edited or that points outside its folder (one line naming the key)."""
     files = manifest.get("files")
@@ -108,6 +113,18 @@ def _check_manifest(path: Path, manifest: dict) -> None:
     if recorded != manifest_digest(manifest):
         raise DatasetError(f"{path}: manifest was edited after it was written (its content does not match its "
                            "manifest_sha256); regenerate the dataset")
+    # a manifest re-hashed after an edit: what it states is still checked against its own limits and tables
+    if manifest["frames"] > MAX_FRAMES:
+        raise DatasetError(f"{path}: manifest key 'frames' is {manifest['frames']}, more than a sequence may have "
+                           f"({MAX_FRAMES:,})")
+    rate = manifest.get("frame_rate_hz")
+    if rate is not None and (type(rate) not in (int, float) or not 0 < rate <= MAX_FRAME_RATE_HZ):
+        raise DatasetError(f"{path}: manifest key 'frame_rate_hz' must be a number in (0, {MAX_FRAME_RATE_HZ:g}], "
+                           f"got {rate!r}")
+    poses = files.get("ego_poses", {}).get("rows")
+    if poses is not None and poses != manifest["frames"]:
+        raise DatasetError(f"{path}: manifest says {manifest['frames']} frames but its ego_poses table holds {poses} "
+                           "rows (one per frame)")
 
 
 def write_json_atomic(path: Path, data: dict) -> None:

@@ -45,6 +45,9 @@ def check_output_path(path: Path | str, *, what: str, inputs: Iterable[Path | st
     The nearest existing folder above ``path`` must be writable: every output is written beside its place and
     renamed into it, so a read-only working folder is refused before any work."""
     path = Path(path)
+    if folder and path.is_symlink():  # a file output replaces a planted link; a folder's contents would be moved
+        raise OutputPathError(f"{what} {str(path)!r} is a symbolic link; simrig does not write through links: name "
+                              "the folder itself, or another")
     resolved = path.resolve()
     if resolved == Path(resolved.anchor):
         raise OutputPathError(f"{what} {str(path)!r} is the root of the file system")

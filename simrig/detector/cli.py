@@ -34,12 +34,25 @@ def _cmd_measure(args: argparse.Namespace) -> int:
         print(format_table(pooled))
     if args.json is not None:
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        text = results[0].to_json() if pooled is None else json.dumps(
-            {"datasets": [asdict(result) for result in results], "reid_pooled": [asdict(row) for row in pooled]},
-            indent=2)
+        document = asdict(results[0]) if pooled is None else {
+            "datasets": [asdict(result) for result in results], "reid_pooled": [asdict(row) for row in pooled]}
+        text = json.dumps(_json_safe(document), indent=2, allow_nan=False)  # an empty band is null, not NaN
         write_text_atomic(args.json, text + "\n")
         print(f"written to {args.json}")
     return 0
+
+
+def _json_safe(value):
+    """``value`` with every NaN or infinite float as None (JSON has no NaN: strict readers refuse the file)."""
+    import math
+
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {key: _json_safe(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(item) for item in value]
+    return value
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:

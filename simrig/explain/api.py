@@ -92,7 +92,7 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     :mod:`simrig.pipeline.trust`)."""
     started = time.perf_counter()
     run_dir = Path(run_dir)
-    dataset = _dataset(run_dir)
+    dataset = _dataset(run_dir, label)
     label = _label(run_dir, label)
     record = _tracker_record(run_dir, label, trust_file)
     if not (run_dir / SCORES_DIR / label / "errors.parquet").is_file():
@@ -241,14 +241,14 @@ def _players(causes: list[str] | None, known: tuple[str, ...], present: tuple[st
     return tuple(dict.fromkeys(causes))
 
 
-def _dataset(run_dir: Path) -> Dataset:
+def _dataset(run_dir: Path, label: str | None = None) -> Dataset:
     if run_dir.is_file():
         raise ExplainError(f"{str(run_dir)!r} is a file; give the folder of a 'simrig run'")
     if not run_dir.is_dir():
         raise ExplainError(f"run folder {str(run_dir)!r} does not exist")
     if run_dir.name in (DATASET_DIR, TRACKS_DIR) and (run_dir.parent / DATASET_DIR).is_dir():
         raise ExplainError(f"{run_dir} is the {run_dir.name} folder of a run; give the run folder itself: "
-                           f"simrig explain {run_dir.parent}")
+                           f"simrig explain {run_dir.parent}" + (f" --tracker {label}" if label else ""))
     try:
         return Dataset.open(run_dir / DATASET_DIR)
     except SimrigError as error:
