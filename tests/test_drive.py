@@ -1,4 +1,4 @@
-"""Closed loop (issue 31): the ego driven by its planner on a tracker's output, inside the simulation."""
+"""Closed loop: the ego driven by its planner on a tracker's output, inside the simulation."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The learned association (issue 35): pair features by hand arithmetic, the model file safe and strict, the
+"""The learned association: pair features by hand arithmetic, the model file safe and strict, the
 learned gate deciding as its probability says, the training loader's labels against the dataset's own truth, and a
 model trained on a small collection separating true pairs from false ones on sequences it never saw."""
 
