@@ -98,3 +98,28 @@ def test_killed_mid_write_the_target_is_old_or_new_never_partial(tmp_path):
         seen.add("old" if data == b"old" else "new")
     assert "old" in seen  # killed before the rename at least once: the test did test something
     print(json.dumps(sorted(seen)))
+
+
+def test_a_partial_folder_of_a_killed_process_not_yet_reaped_is_stale(tmp_path):
+    """A killed worker whose parent was killed too stays a zombie until an init reaps it, which in a container may
+    be never; ``kill(pid, 0)`` still finds it, so its partial folder was kept as if it were being written."""
+    import signal
+    import subprocess
+    import time
+
+    from simrig.dataset.outputs import make_partial, remove_stale_partials
+
+    child = subprocess.Popen(["sleep", "60"])
+    try:
+        out = tmp_path / "dataset"
+        partial = tmp_path / f".dataset.partial-{child.pid}"
+        make_partial(partial)
+        remove_stale_partials(out)
+        assert partial.is_dir()  # its process runs: left alone
+        child.send_signal(signal.SIGKILL)
+        time.sleep(0.2)  # dead, not reaped: a zombie
+        remove_stale_partials(out)
+        assert not partial.exists()
+    finally:
+        child.kill()
+        child.wait()

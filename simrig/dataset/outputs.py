@@ -241,13 +241,20 @@ def publish(partial: Path, out: Path, written_by_simrig: Callable[[Path], bool])
 
 
 def _pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` still runs. A zombie does not: a killed worker whose parent was killed too waits
+    to be reaped by an init that may never do so (in a container), and ``kill(pid, 0)`` still finds it."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:
         return True
-    return True
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii", errors="replace") as stat:
+            return stat.read().rpartition(")")[2].split()[0] != "Z"
+    except (OSError, IndexError):
+        return True  # no /proc (not Linux): the process exists
+
 
 
 def remove_stale_partials(out: Path) -> None:
