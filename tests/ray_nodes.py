@@ -102,8 +102,17 @@ def two_node_cluster() -> Iterator[tuple[str, Path]]:
             shutil.rmtree(temp, ignore_errors=True)
 
 
-def ran_on(node_temp: Path, function: str) -> bool:
+def ran_on(node_temp: Path, function: str, wait_s: float = 20.0) -> bool:
     """Whether a worker of the node with temp folder ``node_temp`` ran ``function`` (Ray marks each task in its
-    worker's log with ``:task_name:FUNCTION``)."""
-    return any(f":task_name:{function}" in log.read_text(errors="replace")
-               for log in node_temp.glob("session_*/logs/worker-*.out"))
+    worker's log with ``:task_name:FUNCTION``). A worker writes its log on its own time, after the task's result
+    has reached the driver: the logs are read again for up to ``wait_s`` seconds before the answer is no."""
+    import time
+
+    deadline = time.monotonic() + wait_s
+    while True:
+        if any(f":task_name:{function}" in log.read_text(errors="replace")
+               for log in node_temp.glob("session_*/logs/worker-*.out")):
+            return True
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.25)
