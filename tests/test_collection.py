@@ -1,4 +1,4 @@
-"""``simrig generate --space`` (issue 35): a collection sampled from a space — the same bytes however it is made
+"""``simrig generate --space``: a collection sampled from a space — the same bytes however it is made
 (workers, engines, interrupted and resumed), the declared shares met, bad spaces refused before any work."""
 
 import json

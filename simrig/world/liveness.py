@@ -24,7 +24,7 @@ from .traffic import TrafficWorld
 WINDOW_FRAMES = 100
 """[-] frames per window of :class:`Liveness`."""
 FLOW_KEPT = 0.5
-"""[-] the last window's mean speed must be at least this fraction of the first's (issue 34)."""
+"""[-] the last window's mean speed must be at least this fraction of the first's."""
 
 
 @dataclass(frozen=True)
