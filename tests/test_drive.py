@@ -167,6 +167,38 @@ def test_a_closed_loop_bench_row_is_the_drive_scored(tmp_path):
 
 
 @pytest.mark.slow
+def test_a_closed_loop_bench_scored_on_the_reference_is_the_tracker_open_loop_on_the_ground_truth_drive(tmp_path):
+    """``scores_on = "reference"``: the metrics are the tracker run open loop on the ground-truth drive's world
+    and scored there; the drive columns are still its own drive's."""
+    from simrig.benchmark import run_bench
+    from simrig.pipeline.track import run_tracker
+    from simrig.scoring import score
+
+    suite = tmp_path / "closed.toml"
+    suite.write_text(CLOSED_SUITE.replace("closed_loop = true", 'closed_loop = true\nscores_on = "reference"'))
+    row = pq_rows(run_bench(suite, out=tmp_path / "bench", workers=1).results)[0]
+    scenario = load_scenario("cut_in")
+    reference = drive(scenario, seed=4, out=tmp_path / "ref", frames=FRAMES)
+    mine = drive(scenario, seed=4, out=tmp_path / "mine", frames=FRAMES, tracker="global_hungarian")
+    logged = Dataset.open(reference.dataset)
+    direct = score(logged, run_tracker(logged, "global_hungarian", seed=4).tracks).metrics3d["overall"]
+    assert row["3d_AMOTA"] == direct["AMOTA"] and row["3d_PKL"] == direct["PKL"]
+    assert row["drive_progress_m"] == mine.outcome.progress_m
+
+
+def test_scores_on_needs_a_closed_loop_suite(tmp_path):
+    from simrig.benchmark.suite import SuiteError, load_suite
+
+    suite = tmp_path / "open.toml"
+    suite.write_text(CLOSED_SUITE.replace("closed_loop = true", 'scores_on = "reference"'))
+    with pytest.raises(SuiteError, match="scores_on: only a closed-loop suite"):
+        load_suite(suite)
+    suite.write_text(CLOSED_SUITE.replace("closed_loop = true", 'closed_loop = true\nscores_on = "log"'))
+    with pytest.raises(SuiteError, match="scores_on"):
+        load_suite(suite)
+
+
+@pytest.mark.slow
 def test_a_closed_loop_bench_writes_the_same_bytes_on_the_local_pool_and_ray(tmp_path):
     assert_same_bench_bytes(CLOSED_SUITE, tmp_path)
 

@@ -7,14 +7,16 @@ Registered here: ``saga`` (SAGA-Track with FOTA), ``global_hungarian`` (AB3DMOT-
 (3D tracks projected into every camera, associated there), ``polymot`` (the modern filter baseline:
 category-specific motion, multi-cue cost, two-stage association), the 2D per-camera trackers ``sort``,
 ``deepsort``, ``bytetrack`` and ``botsort`` (BoT-SORT-style: IoU and appearance fused, ego-motion
-compensation), ``collabmot`` (stereo collaboration on top of them), and ``learned`` (the Kalman tracker with a
-learned association in place of the Mahalanobis gate, trained on simrig data).
+compensation), ``collabmot`` (stereo collaboration on top of them), ``learned`` (the Kalman tracker with a
+learned association in place of the Mahalanobis gate, trained on simrig data), and ``degraded`` (another tracker
+with late, relabelled or velocity-noisy output, for studies of what errors cost).
 """
 
 from .botsort import botsort
 from .bytetrack import bytetrack
 from .collabmot import collabmot
 from .deepsort import deepsort
+from .degraded import degraded
 from .errors import TrackerInputError
 from .global_hungarian import global_hungarian
 from .learned import learned
@@ -40,6 +42,7 @@ for _name, _factory in (
     ("bytetrack", bytetrack),
     ("botsort", botsort),
     ("learned", learned),
+    ("degraded", degraded),
 ):
     register(_name, _factory)
 
@@ -47,5 +50,9 @@ TRAINED_ON_SIMRIG = ("learned",)
 """Registered trackers whose model was trained on simrig data: not reference trackers (the papers' methods and the
 Kalman baselines, every one in the ``standard`` suite) but compared with them in the ``learned`` suite, on the road
 types they were trained on and on one held out."""
+DEGRADERS = ("degraded",)
+"""Registered trackers that make another tracker worse on purpose (studies of what errors cost, e.g. the
+``metric_validity`` suite): not reference trackers either."""
 
-__all__ = ["TRAINED_ON_SIMRIG", "Tracker", "TrackerInputError", "available", "create", "parameters", "register"]
+__all__ = ["DEGRADERS", "TRAINED_ON_SIMRIG", "Tracker", "TrackerInputError", "available", "create", "parameters",
+           "register"]

@@ -7,9 +7,12 @@ the scorer in memory and are not kept; a cell's tracks can be made again exactly
 from __future__ import annotations
 
 import math
+import tempfile
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
+from simrig.dataset import Dataset
 from simrig.pipeline.cache import cached_dataset
 from simrig.pipeline.guard import TrackerFault, TrackerTimeout
 from simrig.pipeline.track import run_tracker
@@ -64,13 +67,21 @@ def evaluate(job: Job) -> tuple[list[Outcome], float]:
                              f"imported in a bench worker ({type(error).__name__}: {error}): define it at the "
                              "top level of a module of its own, register it by entry point, or name it "
                              "module:attribute") from None
+    with tempfile.TemporaryDirectory(prefix="simrig-reference-drive-") as work:
+        return _evaluate(job, Path(work))
+
+
+def _evaluate(job: Job, work: Path) -> tuple[list[Outcome], float]:
     started = time.perf_counter()
     where = f"cell {job.cell} ({job.scenario.name}, seed {job.seed}, {job.frames} frames)"
+    reference = dataset = None
     try:
         if job.closed_loop:  # each tracker drives its own world; the ground-truth drive is the reference
-            from simrig.pipeline.drive import closed_loop_score, reference_outcome
+            from simrig.pipeline.drive import closed_loop_score, reference_drive
 
-            reference = reference_outcome(job.scenario, job.seed, job.frames)
+            reference = reference_drive(job.scenario, job.seed, job.frames, work)
+            if job.scores_on == "reference":
+                dataset = Dataset.open(reference.dataset)
         else:
             dataset = cached_dataset(job.scenario, job.seed, job.frames, job.cache)
     except SimrigError as error:
@@ -80,15 +91,16 @@ def evaluate(job: Job) -> tuple[list[Outcome], float]:
     for key, entry in job.trackers:
         try:
             drive_values: dict[str, float] = {}
-            if job.closed_loop:
+            step_s = 0.0
+            if reference is not None:
                 driven = closed_loop_score(job.scenario, job.seed, entry.tracker, dict(entry.params), job.frames,
-                                           reference, job.frame_time_limit_s)
+                                           reference.outcome, job.frame_time_limit_s, scored=dataset is None)
                 report, drive_values, step_s = driven.report, driven.outcomes, driven.step_seconds
-                scoring_started = time.perf_counter()
-            else:
+            scoring_started = time.perf_counter()
+            if dataset is not None:
                 run = run_tracker(dataset, entry.tracker, None, dict(entry.params), seed=job.seed,  # in memory
                                   frame_time_limit_s=job.frame_time_limit_s)
-                step_s = run.step_seconds
+                step_s += run.step_seconds
                 scoring_started = time.perf_counter()
                 report = score(dataset, run.tracks, camera=entry.camera)
         except TrackerTimeout as error:  # the tracker's recorded failure on this cell; the bench goes on

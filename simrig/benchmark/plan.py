@@ -62,11 +62,18 @@ class Job:
     a worker registers again before it runs them (:func:`simrig.trackers.registry.register_again`)."""
     closed_loop: bool = False
     """Each tracker drives the cell closed loop (the suite's ``closed_loop``)."""
+    scores_on: str = "drive"
+    """Closed loop: score the tracks on the tracker's own drive or on the ground-truth drive (the suite's
+    ``scores_on``)."""
 
 
-def tracker_key(entry: TrackerEntry) -> str:
-    """Content key of a tracker entry: its spec, parameters and scored camera (not its label)."""
+def tracker_key(entry: TrackerEntry, suite: Suite | None = None) -> str:
+    """Content key of a tracker entry: its spec, parameters and scored camera (not its label), and for a
+    closed-loop ``suite`` what its rows are (a drive, scored on which world), so that a bench resumed with those
+    settings changed runs its cells again."""
     identity = {"tracker": entry.tracker, "params": entry.params, "camera": entry.camera}
+    if suite is not None and suite.closed_loop:
+        identity["closed_loop"] = suite.scores_on
     return hashlib.sha256(json.dumps(identity, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
@@ -85,7 +92,7 @@ class Plan:
 
     def work(self) -> dict[str, tuple[tuple[str, TrackerEntry], ...]]:
         """cell key → the (tracker key, entry) pairs to run on it, in suite order."""
-        return {key: tuple((tracker_key(entry), entry) for entry in self.trackers_of(scenario))
+        return {key: tuple((tracker_key(entry, self.suite), entry) for entry in self.trackers_of(scenario))
                 for key, (scenario, _, _) in self.cells.items()}
 
     def jobs(self, finished: set[tuple[str, str]], cache: Path) -> list[Job]:
@@ -103,7 +110,7 @@ class Plan:
             if pending:
                 (later if world in worlds else first).append(Job(key, scenario, seed, frames, cache, pending,
                                                                     self.suite.frame_time_limit_s, registered,
-                                                                    self.suite.closed_loop))
+                                                                    self.suite.closed_loop, self.suite.scores_on))
             worlds.add(world)
         return first + later
 

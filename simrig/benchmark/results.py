@@ -86,7 +86,7 @@ def assemble(plan: Plan, out: Path) -> dict[str, pa.Table]:
     rows, causes, cameras = [], [], []
     for point in plan.points:
         for entry in plan.trackers_of(plan.cells[point.cell][0]):
-            fragment = fragments[(point.cell, tracker_key(entry))]
+            fragment = fragments[(point.cell, tracker_key(entry, plan.suite))]
             head = {"suite": plan.suite.name, "scenario": point.scenario, "rig": point.rig, "sweep": point.sweep,
                     "value": point.value, "seed": point.seed, "frames": point.frames, "cell": point.cell,
                     "tracker": entry.name, "scored": fragment.get("scored", entry.camera or "3d")}

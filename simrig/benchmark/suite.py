@@ -37,7 +37,7 @@ names the suite file and the entry.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import Field, ValidationError, model_validator
 
@@ -125,6 +125,11 @@ class Suite(Strict):
     closed_loop: bool = False
     """Each tracker drives every cell closed loop (``simrig drive``): its scores are those of its tracks on the world
     it drove, and the results gain the drive outcome columns (``drive_*``) against the cell's ground-truth drive."""
+    scores_on: Literal["drive", "reference"] = "drive"
+    """A closed-loop suite's metric columns score the tracker's tracks on ``drive``, the world it drove itself, or
+    on ``reference``, the world of the cell's ground-truth drive (the log an open-loop benchmark would score on),
+    where the tracker also runs open loop: the open-loop score and the closed-loop outcome of one tracker side by
+    side (the ``metric_validity`` suite)."""
     base: bool = True
     """Also run each scenario with its own settings (besides the sweeps)."""
     trackers: Annotated[tuple[TrackerEntry, ...], Field(min_length=1)]
@@ -147,6 +152,8 @@ class Suite(Strict):
                 if entry.camera is not None:
                     raise ValueError(f"trackers.{index}.camera: a closed-loop suite drives on 3D tracks over every "
                                      "camera; a tracker scored on one camera cannot drive")
+        if self.scores_on != "drive" and not self.closed_loop:
+            raise ValueError("scores_on: only a closed-loop suite (closed_loop = true) has a drive to score on")
         if not self.base and not self.sweeps:
             raise ValueError("base: with base = false the suite needs at least one sweep")
         return self

@@ -293,7 +293,7 @@ def _frames(frames: list[int]) -> str:
 @dataclass(frozen=True)
 class ClosedLoopScore:
     """A tracker's drive scored: the score report of its tracks on its own drive's dataset (open loop on the world
-    it drove), and the drive outcomes (:data:`~simrig.scoring.drive_outcome.DRIVE_COLUMNS`)."""
+    it drove; None when not asked for), and the drive outcomes (:data:`~simrig.scoring.drive_outcome.DRIVE_COLUMNS`)."""
 
     report: object
     outcomes: dict[str, float]
@@ -301,18 +301,17 @@ class ClosedLoopScore:
 
 
 def closed_loop_score(scenario: Scenario, seed: int, tracker, params: dict | None, frames: int | None,
-                      reference: DriveOutcome, frame_time_limit_s: float | None = FRAME_TIME_LIMIT_S
-                      ) -> ClosedLoopScore:
+                      reference: DriveOutcome, frame_time_limit_s: float | None = FRAME_TIME_LIMIT_S, *,
+                      scored: bool = True) -> ClosedLoopScore:
     """Drive ``scenario`` on ``tracker`` in a temporary folder (removed after: a drive is made again exactly from
-    its scenario, seed and tracker), score it, and compare its outcome with ``reference`` (the ground-truth drive's:
-    :func:`reference_outcome`)."""
+    its scenario, seed and tracker), score it unless not ``scored``, and compare its outcome with ``reference``
+    (the ground-truth drive's: :func:`reference_drive`)."""
     from simrig.scoring import score
 
     with tempfile.TemporaryDirectory(prefix="simrig-drive-") as work:
         result = drive(scenario, seed=seed, out=Path(work), tracker=tracker, params=params, frames=frames,
                        frame_time_limit_s=frame_time_limit_s)
-        dataset = Dataset.open(result.dataset)
-        report = score(dataset, result.tracks)
+        report = score(Dataset.open(result.dataset), result.tracks) if scored else None
     outcome = result.outcome
     values = {
         "drive_collision": float(outcome.collisions > 0), "drive_near_misses": float(len(outcome.near_misses)),
@@ -322,7 +321,6 @@ def closed_loop_score(scenario: Scenario, seed: int, tracker, params: dict | Non
     return ClosedLoopScore(report, values, result.step_seconds)
 
 
-def reference_outcome(scenario: Scenario, seed: int, frames: int | None) -> DriveOutcome:
-    """The outcome of the ground-truth drive of ``scenario`` and ``seed`` (made in a temporary folder)."""
-    with tempfile.TemporaryDirectory(prefix="simrig-drive-") as work:
-        return drive(scenario, seed=seed, out=Path(work), frames=frames).outcome
+def reference_drive(scenario: Scenario, seed: int, frames: int | None, out: Path) -> DriveResult:
+    """The ground-truth drive of ``scenario`` and ``seed``, made in ``out`` (``out/dataset``)."""
+    return drive(scenario, seed=seed, out=out, frames=frames)

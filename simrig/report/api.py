@@ -24,6 +24,7 @@ from .summary import (
     scenario_table,
     tracker_table,
 )
+from .validity_section import metric_validity_section
 from .worst_cell import inspect_worst
 
 DEFAULT_REPORT_DIR = "report"
@@ -49,6 +50,8 @@ def write_report(results: Path | str, *, out: Path | str | None = None) -> Path:
     lines += _causes_section(bench)
     lines += cause_costs_section(bench.folder, bench.suite, [entry["name"] for entry in bench.trackers])
     lines += _worst_section(bench, out)
+    if bench.description["suite_settings"].get("closed_loop"):
+        lines += metric_validity_section(bench, out)
     index = out / "index.md"
     write_text_atomic(index, "\n".join(lines) + "\n")
     return index

@@ -1,0 +1,180 @@
+"""Which open-loop tracking metric predicts how the car drives: rank correlations of every metric with every
+closed-loop outcome of a closed-loop bench, with bootstrap intervals (``simrig report`` on such a bench).
+
+A *configuration* is a tracker at one detector setting (the suite's base or one sweep value) on one scenario. Its
+metric and its outcome are means over the suite's seeds (the least time to collision capped at
+:data:`TTC_CAP_S` first, so that a drive where nothing ever closed in counts as a safe one, not as infinity). Per
+scenario, Spearman's ρ and Kendall's τ-b over the configurations say whether the metric orders them as driving
+does; each metric and outcome is first oriented so that higher is better (:data:`METRICS`, :data:`OUTCOMES`), so a
+positive correlation is agreement. Over scenarios: the mean of the per-scenario correlations. This is the
+system-level agreement a benchmark's user relies on ("if my tracker scores higher, does it drive better?"), as
+NAVSIM (Dauner et al., NeurIPS 2024) compared its open-loop score with closed-loop results across planners.
+
+Intervals: 95 % percentile bootstrap over seeds — each replicate draws the seeds with replacement (one draw shared
+by every configuration and scenario, so configurations stay paired), recomputes the means and the correlations.
+A difference between two metrics is bootstrapped on the same replicates (paired).
+
+Both correlations are computed here, vectorised over the replicates (ranks by :func:`scipy.stats.rankdata`, τ-b as
+Σ sgn·sgn / √(Σ sgn² Σ sgn²) over pairs), rather than by :func:`scipy.stats.spearmanr` and
+:func:`scipy.stats.kendalltau` once per replicate, which would take minutes for a suite's 2000 × 36 × scenarios
+calls; the tests check both against scipy.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from scipy.stats import rankdata
+
+METRICS = (("AMOTA", "3d_AMOTA", 1), ("HOTA", "2d_HOTA", 1), ("IDF1", "2d_IDF1", 1), ("MOTA", "3d_MOTA", 1),
+           ("ATVE", "3d_ATVE", -1), ("PKL", "3d_PKL", -1), ("dACC", "3d_dACC", -1), ("HZ_MISS", "3d_HZ_MISS", -1),
+           ("HZ_FAKE", "3d_HZ_FAKE", -1))
+"""(name, results column, +1 if higher is better else −1) of each open-loop metric."""
+OUTCOMES = (("collision", "drive_collision", -1), ("least TTC", "drive_min_ttc_s", 1),
+            ("hard brakes", "drive_hard_brakes", -1), ("progress lost", "drive_progress_lost_m", -1))
+"""(name, results column, orientation) of each closed-loop outcome: collision rate, least time to collision,
+hard brakes per drive, progress lost against the ground-truth drive [m]."""
+TTC_CAP_S = 10.0
+"""[s] least times to collision above this (and ``inf``) count as this: beyond it nothing was in conflict."""
+REPLICATES = 2000
+"""Bootstrap replicates."""
+BOOTSTRAP_SEED = 20241
+"""Seed of the bootstrap's draws (a fixed stream: the report is the same bytes from the same bench)."""
+MIN_CONFIGURATIONS = 4
+"""A scenario needs at least this many configurations with values for its correlations to be computed."""
+
+
+class TooFewCells(ValueError):
+    """The bench has too few configurations or seeds to correlate (the message says which)."""
+
+
+@dataclass(frozen=True)
+class Correlations:
+    """Per scenario (and ``"all"``: the mean over scenarios), metric and outcome: the point estimate and the
+    bootstrap replicates of Spearman's ρ and Kendall's τ-b (``*_boot`` shape ``(REPLICATES,)``).
+    ``means[scenario]``: the configuration means (columns = metric and outcome columns, oriented as stored)."""
+
+    scenarios: tuple[str, ...]
+    seeds: tuple[int, ...]
+    configurations: dict[str, int]
+    spearman: dict[tuple[str, str, str], float]
+    kendall: dict[tuple[str, str, str], float]
+    spearman_boot: dict[tuple[str, str, str], np.ndarray]
+    kendall_boot: dict[tuple[str, str, str], np.ndarray]
+    means: dict[str, pd.DataFrame]
+
+    def interval(self, kind: str, scenario: str, metric: str, outcome: str) -> tuple[float, float]:
+        """The 95 % percentile interval of ``kind`` (``spearman`` or ``kendall``)."""
+        boot = getattr(self, f"{kind}_boot")[(scenario, metric, outcome)]
+        return _percentiles(boot)
+
+    def difference(self, scenario: str, first: str, second: str, outcome: str) -> tuple[float, float, float]:
+        """Spearman ρ(first) − ρ(second) with outcome, and its paired 95 % interval."""
+        key_a, key_b = (scenario, first, outcome), (scenario, second, outcome)
+        point = self.spearman[key_a] - self.spearman[key_b]
+        return (point, *_percentiles(self.spearman_boot[key_a] - self.spearman_boot[key_b]))
+
+
+def _percentiles(boot: np.ndarray) -> tuple[float, float]:
+    finite = boot[np.isfinite(boot)]
+    if not len(finite):
+        return (float("nan"), float("nan"))
+    low, high = np.percentile(finite, [2.5, 97.5])
+    return float(low), float(high)
+
+
+def oriented_values(results: pd.DataFrame) -> pd.DataFrame:
+    """One row per (scenario, configuration, seed): every metric and outcome, oriented so higher is better, the
+    least TTC capped at :data:`TTC_CAP_S`. ``configuration`` is ``tracker`` plus the detector setting."""
+    frame = results.copy()
+    setting = np.where(frame["sweep"] == "", "", " @ " + frame["sweep"] + "=" + frame["value"].map("{:g}".format))
+    frame["configuration"] = frame["tracker"] + setting
+    frame["drive_min_ttc_s"] = frame["drive_min_ttc_s"].clip(upper=TTC_CAP_S)
+    for _, column, sign in (*METRICS, *OUTCOMES):
+        frame[column] = sign * frame[column].astype(float)
+    columns = [column for _, column, _ in (*METRICS, *OUTCOMES)]
+    return frame[["scenario", "configuration", "seed", *columns]]
+
+
+def correlate(results: pd.DataFrame, *, replicates: int = REPLICATES, seed: int = BOOTSTRAP_SEED) -> Correlations:
+    """The rank correlations of every metric with every outcome (module docstring) of a closed-loop bench's
+    ``results``; :class:`TooFewCells` when a scenario has fewer than :data:`MIN_CONFIGURATIONS` configurations or
+    the bench fewer than 2 seeds."""
+    values = oriented_values(results)
+    seeds = tuple(sorted(values["seed"].unique()))
+    if len(seeds) < 2:
+        raise TooFewCells(f"{len(seeds)} seed: the bootstrap over seeds needs at least 2")
+    draws = np.random.default_rng(seed).integers(0, len(seeds), size=(replicates, len(seeds)))
+    scenarios = tuple(dict.fromkeys(values["scenario"]))
+    names = [(m, mc) for m, mc, _ in METRICS] + [(o, oc) for o, oc, _ in OUTCOMES]
+    spearman, kendall, spearman_boot, kendall_boot, means, counts = {}, {}, {}, {}, {}, {}
+    for scenario in scenarios:
+        rows = values[values["scenario"] == scenario]
+        cube = {column: rows.pivot_table(index="configuration", columns="seed", values=column, dropna=False,
+                                         aggfunc="first").reindex(columns=list(seeds)).to_numpy(float)
+                for _, column in names}
+        configurations = rows.pivot_table(index="configuration", columns="seed", values=names[0][1],
+                                          aggfunc="first", dropna=False).index
+        if len(configurations) < MIN_CONFIGURATIONS:
+            raise TooFewCells(f"scenario {scenario}: {len(configurations)} configurations (trackers × detector "
+                              f"settings); the correlations need at least {MIN_CONFIGURATIONS}")
+        counts[scenario] = len(configurations)
+        point = {column: np.nanmean(cube[column], axis=1) for _, column in names}  # (C,)
+        boot = {column: np.nanmean(cube[column][:, draws], axis=2) for _, column in names}  # (C, B)
+        means[scenario] = pd.DataFrame(point, index=configurations)
+        for metric, metric_column in names[:len(METRICS)]:
+            for outcome, outcome_column in names[len(METRICS):]:
+                key = (scenario, metric, outcome)
+                x, y = point[metric_column][:, None], point[outcome_column][:, None]
+                spearman[key] = float(spearman_rho(x, y)[0])
+                kendall[key] = float(kendall_tau_b(x, y)[0])
+                spearman_boot[key] = spearman_rho(boot[metric_column], boot[outcome_column])
+                kendall_boot[key] = kendall_tau_b(boot[metric_column], boot[outcome_column])
+    for metric, _, _ in METRICS:
+        for outcome, _, _ in OUTCOMES:
+            key = ("all", metric, outcome)
+            for store in (spearman, kendall, spearman_boot, kendall_boot):
+                with warnings.catch_warnings():  # a metric constant on every scenario: NaN, said in the tables
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    store[key] = np.nanmean([store[(s, metric, outcome)] for s in scenarios], axis=0)
+            spearman[key], kendall[key] = float(spearman[key]), float(kendall[key])
+    return Correlations(scenarios, seeds, counts, spearman, kendall, spearman_boot, kendall_boot, means)
+
+
+def spearman_rho(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Spearman's ρ of each column pair of ``x`` and ``y`` ``(C, B)`` (average ranks for ties; rows with a NaN in
+    either dropped per column): ``(B,)``, NaN where a column is constant."""
+    out = np.full(x.shape[1], np.nan)
+    keep = np.isfinite(x) & np.isfinite(y)
+    full = keep.all(axis=0)
+    if full.any():
+        out[full] = _pearson(rankdata(x[:, full], axis=0), rankdata(y[:, full], axis=0))
+    for column in np.flatnonzero(~full):
+        rows = keep[:, column]
+        if rows.sum() >= 3:
+            out[column] = _pearson(rankdata(x[rows, column])[:, None], rankdata(y[rows, column])[:, None])[0]
+    return out
+
+
+def _pearson(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    dx, dy = x - x.mean(axis=0), y - y.mean(axis=0)
+    denominator = np.sqrt((dx * dx).sum(axis=0) * (dy * dy).sum(axis=0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(denominator > 0, (dx * dy).sum(axis=0) / np.where(denominator > 0, denominator, 1), np.nan)
+
+
+def kendall_tau_b(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Kendall's τ-b of each column pair of ``x`` and ``y`` ``(C, B)`` over the rows finite in both: ``(B,)``, NaN
+    where a column is constant."""
+    keep = np.isfinite(x) & np.isfinite(y)
+    sx = np.sign(x[:, None, :] - x[None, :, :])
+    sy = np.sign(y[:, None, :] - y[None, :, :])
+    both = keep[:, None, :] & keep[None, :, :]
+    sx, sy = np.where(both, sx, 0.0), np.where(both, sy, 0.0)
+    denominator = np.sqrt((sx * sx).sum(axis=(0, 1)) * (sy * sy).sum(axis=(0, 1)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(denominator > 0, (sx * sy).sum(axis=(0, 1)) / np.where(denominator > 0, denominator, 1),
+                        np.nan)
