@@ -249,3 +249,23 @@ def test_a_run_that_was_not_scored_is_one_line(tmp_path, run_folder, capsys):
     assert main(["explain", str(tmp_path / "run")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("simrig: error: ") and "no errors.parquet" in err and err.count("\n") == 1
+
+
+def test_a_rerun_stopped_before_its_end_leaves_no_finished_looking_explain(explained, monkeypatch, tmp_path):
+    """The document is written last: stopped while drawing its figures, a rerun leaves no explain.json (an
+    earlier one is removed first), so the folder does not look finished with mixed files."""
+    import shutil
+
+    import simrig.explain.api as api
+
+    run = shutil.copytree(run_folder_of(explained), tmp_path / "run")
+    out = run / explained.out.relative_to(run_folder_of(explained))
+    assert (out / "explain.json").is_file()
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(api, "waterfall", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        explain(run, causes=["occlusion", "random_misses"], metrics=["AMOTA"], workers=1)
+    assert (out / "verdicts.parquet").is_file() and not (out / "explain.json").exists()

@@ -8,7 +8,7 @@ between the perfect sensor's score and the actual score is split among the group
 confidence interval otherwise. Each FN / IDS / FRAG of the actual run also gets a verdict: the groups whose
 removal alone makes it disappear (matched by dimension, kind, actor, frame and camera).
 
-Writes ``RUN_DIR/explain/LABEL/``: ``explain.json``, ``explain.md`` (the table and its command),
+Writes ``RUN_DIR/explain/LABEL/``: ``explain.json`` (last), ``explain.md`` (the table and its command),
 ``verdicts.parquet`` and a waterfall plot per metric; counterfactual datasets are cached in
 ``RUN_DIR/explain/cache/``.
 """
@@ -49,6 +49,8 @@ EXPLAINABLE_3D = (*METRICS_3D, *PLANNER_METRICS)
 """The 3D metrics a run can be explained on: the nuScenes family and the planner-aware scores."""
 
 CACHE_DIR = "cache"
+EXPLAIN_FILE = "explain.json"
+"""The explain folder's document, written last: a folder without it did not finish."""
 EXACT_LIMIT = 7
 """Up to this many groups the Shapley values are exact (2^7 = 128 coalitions); above, sampled."""
 DEFAULT_SAMPLES = 12
@@ -110,14 +112,15 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     document = _document(scenario.name, dataset, label, record, chosen, known, present, game, verdicts, run_dir)
     out = run_dir / EXPLAIN_DIR / label
     out.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(out / "explain.json", document)
-    table = explain_table(document)
-    write_text_atomic(out / "explain.md", _explain_markdown(document, table))
+    (out / EXPLAIN_FILE).unlink(missing_ok=True)  # written last: until then the folder must not look finished
     with atomic_file(out / "verdicts.parquet") as partial:
         pq.write_table(verdicts["table"], partial)
     plots = tuple(waterfall(document, name, out / f"waterfall-{_file_name(name)}.png") for name in chosen)
     for stale in set(out.glob("waterfall-*.png")) - set(plots):  # an earlier explain's other metrics
         stale.unlink()
+    table = explain_table(document)
+    write_text_atomic(out / "explain.md", _explain_markdown(document, table))
+    write_json_atomic(out / EXPLAIN_FILE, document)
     return ExplainResult(out, document, table, plots, len(game.results), time.perf_counter() - started)
 
 
