@@ -83,6 +83,7 @@ def test_a_crashing_tracker_names_the_file_and_line_and_shows_the_traceback_on_r
                            env={**env, "SIMRIG_TRACEBACK": "1"}, capture_output=True, text=True, timeout=300)
     assert "Traceback (most recent call last)" in shown.stderr and "return [1 / self.count]" in shown.stderr
     assert shown.stderr.rstrip().splitlines()[-1].startswith("simrig: error: ")
+    assert f"(at {where})" in shown.stderr and "shows the whole traceback" not in shown.stderr  # no hint then
 
 
 @pytest.mark.parametrize("command", ["generate", "run", "drive"])

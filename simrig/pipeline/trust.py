@@ -115,16 +115,18 @@ TRACEBACK_VARIABLE = "SIMRIG_TRACEBACK"
 
 def raised_at(error: BaseException) -> str:
     """`` (at FILE:LINE in FUNCTION; SIMRIG_TRACEBACK=1 shows the whole traceback)``: where in the tracker's code
-    ``error`` was raised — the innermost frame outside simrig and the standard library's own machinery."""
+    ``error`` was raised — the innermost frame outside simrig and the standard library's own machinery (the hint
+    left out when the variable is already set)."""
     import traceback
 
-    hint = f"{TRACEBACK_VARIABLE}=1 shows the whole traceback"
+    shown = os.environ.get(TRACEBACK_VARIABLE) == "1"  # then the whole traceback is printed: no hint
+    hint = "" if shown else f"; {TRACEBACK_VARIABLE}=1 shows the whole traceback"
     if isinstance(error, SyntaxError) and error.filename:
-        return f" (at {error.filename}:{error.lineno}; {hint})"
+        return f" (at {error.filename}:{error.lineno}{hint})"
     ours = (str(Path(__file__).parents[1]) + os.sep, str(Path(tracker_registry.__file__).parent) + os.sep)
     mine = [f for f in traceback.extract_tb(error.__traceback__) if not f.filename.startswith(ours)
             and not f.filename.startswith("<frozen importlib")]
     if not mine:
         return ""
     where = mine[-1]
-    return f" (at {where.filename}:{where.lineno} in {where.name}; {hint})"
+    return f" (at {where.filename}:{where.lineno} in {where.name}{hint})"
