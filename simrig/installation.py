@@ -26,9 +26,23 @@ def other_owners() -> list[str]:
         name = distribution.metadata.get("Name") or ""
         if _canonical(name) == _canonical(DISTRIBUTION):
             continue
-        if any(str(path).replace("\\", "/").startswith("simrig/") for path in distribution.files or ()):
+        if _owns_simrig_files(distribution):
             owners.add(f"{name} {distribution.version}")
     return sorted(owners)
+
+
+def _owns_simrig_files(distribution: metadata.Distribution) -> bool:
+    """Whether ``distribution``'s record lists a file under ``simrig/``: its RECORD searched as text (building a
+    path object per recorded file, as ``Distribution.files`` does, took 0.4 s over a large environment), its
+    ``files`` when it has no RECORD (an egg-info install)."""
+    record = distribution.read_text("RECORD")
+    if record is not None:
+        return _RECORDED.search(record.replace("\\", "/")) is not None
+    return any(str(path).replace("\\", "/").startswith("simrig/") for path in distribution.files or ())
+
+
+_RECORDED = re.compile(r'^"?simrig/', re.MULTILINE)
+"""A RECORD line (CSV: path, hash, size) of a file under ``simrig/``; a path with a comma is quoted."""
 
 
 def ownership_warning() -> str | None:
