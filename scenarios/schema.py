@@ -52,6 +52,11 @@ class TrafficConfig(Strict):
     """[m/s] target speed of the ego's IDM driver."""
     simulation_substeps: Annotated[int, Field(ge=1, le=20)] = 1
     """[-] highway-env integration steps per output frame."""
+    crashes: Literal["allowed", "refused"] = "allowed"
+    """``refused``: a collision between two road users other than the ego stops the generation with an error that
+    names the seed, frame and vehicles (a bench records it as that cell's failure and goes on), so a dataset of
+    this scenario never holds one. The ego's own collisions are always recorded: in a drive they are its outcome.
+    ``allowed``: such vehicles leave the road with a ``vehicle_crashed`` event."""
     class_mix: dict[Literal["car", "truck", "bus", "motorcycle"], NonNegativeFloat] = Field(
         default_factory=lambda: {"car": 0.8, "truck": 0.1, "bus": 0.05, "motorcycle": 0.05}
     )

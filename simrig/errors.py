@@ -19,3 +19,8 @@ class TracksError(SimrigError):
 
 class RenderPlatformError(SimrigError):
     """No offscreen OpenGL context could be made for rendering (the message names ``PYOPENGL_PLATFORM``)."""
+
+
+class TrafficCrashError(SimrigError):
+    """Two road users other than the ego collided in a scenario that refuses crashes (``traffic.crashes =
+    "refused"``); the message names the scenario, seed, frame and vehicles."""

@@ -89,8 +89,34 @@ def test_a_collision_is_recorded_at_the_frame_worked_out_by_hand_and_the_pair_st
 def test_two_other_vehicles_that_collide_are_rows_of_the_dataset_not_only_manifest_events(tmp_path, monkeypatch):
     from simrig.pipeline.generate import generate
 
+    crashed = _plant_a_crash_at_frame_1(monkeypatch)
+    scenario = with_setting(load_scenario("highway_surround6"), "render.visibility", False)
+    generate(scenario, seed=0, out=tmp_path / "ds", frames=4)
+    rows = Dataset.open(tmp_path / "ds").table("collisions").to_pylist()
+    assert [(r["frame"], r["first"], r["second"], r["geometry"], r["highway_env"]) for r in rows] == [
+        (1, *crashed, True, True)]
+    assert 4.0 < rows[0]["closing_speed"] <= 5.0 + 1e-9  # 5 m/s less what IDM braking took off in one step
+
+
+def test_a_scenario_that_refuses_crashes_stops_at_the_first_one_and_leaves_no_dataset(tmp_path, monkeypatch):
+    from simrig.errors import TrafficCrashError
+    from simrig.pipeline.generate import generate
+
+    crashed = _plant_a_crash_at_frame_1(monkeypatch)
+    scenario = with_setting(with_setting(load_scenario("highway_surround6"), "render.visibility", False),
+                            "traffic.crashes", "refused")
+    with pytest.raises(TrafficCrashError) as refused:
+        generate(scenario, seed=0, out=tmp_path / "ds", frames=4)
+    assert str(refused.value).startswith(f"highway_surround6: seed 0: vehicles {crashed[0]} and {crashed[1]} "
+                                         "collide at frame 1, and the scenario refuses crashes")
+    assert not (tmp_path / "ds").exists() and list(tmp_path.iterdir()) == []
+
+
+def _plant_a_crash_at_frame_1(monkeypatch) -> list[int]:
+    """Two other vehicles placed 0.3 m apart, the one behind 5 m/s faster: they collide in the first step.
+    Returns their ids, sorted (filled in when the world is reset)."""
     reset = TrafficWorld.reset
-    crashed = []
+    crashed: list[int] = []
 
     def reset_then_crash(self):
         state = reset(self)
@@ -102,12 +128,38 @@ def test_two_other_vehicles_that_collide_are_rows_of_the_dataset_not_only_manife
         return state
 
     monkeypatch.setattr(TrafficWorld, "reset", reset_then_crash)
-    scenario = with_setting(load_scenario("highway_surround6"), "render.visibility", False)
-    generate(scenario, seed=0, out=tmp_path / "ds", frames=4)
-    rows = Dataset.open(tmp_path / "ds").table("collisions").to_pylist()
-    assert [(r["frame"], r["first"], r["second"], r["geometry"], r["highway_env"]) for r in rows] == [
-        (1, *crashed, True, True)]
-    assert 4.0 < rows[0]["closing_speed"] <= 5.0 + 1e-9  # 5 m/s less what IDM braking took off in one step
+    return crashed
+
+
+CRASHING_SUITE = """
+name = "crashes"
+scenarios = ["no_crash.toml"]
+seeds = [0, 1]
+frames = 20
+
+[[trackers]]
+tracker = "global_hungarian"
+"""
+
+
+@pytest.mark.parametrize("crashes", ["refused", "allowed"])
+def test_a_bench_records_a_refused_crash_as_that_cells_failure_and_counts_allowed_ones(crashes, tmp_path):
+    """intersection_surround6 seed 0: two other vehicles collide at frame 18 (seed 1: none in 20 frames)."""
+    import pyarrow.parquet as pq
+
+    from simrig.benchmark import run_bench
+
+    (tmp_path / "no_crash.toml").write_text(f'extends = "intersection_surround6"\nname = "no_crash"\n'
+                                            f'[render]\nvisibility = false\n[traffic]\ncrashes = "{crashes}"\n')
+    (tmp_path / "suite.toml").write_text(CRASHING_SUITE)
+    rows = {row["seed"]: row for row in pq.read_table(run_bench(tmp_path / "suite.toml", out=tmp_path / "bench",
+                                                                workers=1).results).to_pylist()}
+    assert rows[1]["failure"] is None and rows[1]["traffic_crashes"] == 0 and rows[1]["3d_AMOTA"] >= 0
+    if crashes == "refused":
+        assert rows[0]["failure"].startswith("traffic crash: no_crash: seed 0: vehicles ")
+        assert "collide at frame 18" in rows[0]["failure"] and rows[0]["3d_AMOTA"] is None  # NaN: null
+    else:
+        assert rows[0]["failure"] is None and rows[0]["traffic_crashes"] == 1
 
 
 class Blind:

@@ -16,22 +16,23 @@ from simrig.dataset import Dataset
 from simrig.pipeline.cache import cached_dataset
 from simrig.pipeline.guard import TrackerFault, TrackerTimeout
 from simrig.pipeline.track import run_tracker
-from simrig.scoring.drive_outcome import DRIVE_COLUMNS
+from simrig.scoring.drive_outcome import DRIVE_COLUMNS, traffic_crashes
 from simrig.scoring.planner import PLANNER_METRICS
 from simrig.scoring.results import METRICS_2D, METRICS_3D
 from simrig.trackers.registry import register_again
 
-from ..errors import SimrigError
+from ..errors import SimrigError, TrafficCrashError
 from ..scoring import ScoreReport, score
 from ..scoring.attribution import errors_by_cause
 from .plan import Job
 
 METRIC_COLUMNS = (*(f"3d_{name}" for name in (*METRICS_3D, *PLANNER_METRICS)), *(f"2d_{name}" for name in METRICS_2D),
-                  *DRIVE_COLUMNS)
+                  *DRIVE_COLUMNS, "traffic_crashes")
 """Metric columns of the results table: ``3d_`` overall 3D metrics (nuScenes style, null for a tracker scored on
 one camera, with the planner-aware scores), ``2d_`` overall 2D metrics (TrackEval style; of that one camera when the
 tracker names one), and ``drive_`` the closed-loop outcomes (:data:`~simrig.scoring.drive_outcome.DRIVE_COLUMNS`; null
-unless the suite drives closed loop)."""
+unless the suite drives closed loop); ``traffic_crashes``: collisions between road users other than the ego in the
+world the tracker was scored on (:func:`~simrig.scoring.drive_outcome.traffic_crashes`)."""
 
 
 class BenchError(SimrigError):
@@ -84,6 +85,8 @@ def _evaluate(job: Job, work: Path) -> tuple[list[Outcome], float]:
                 dataset = Dataset.open(reference.dataset)
         else:
             dataset = cached_dataset(job.scenario, job.seed, job.frames, job.cache)
+    except TrafficCrashError as error:  # the scenario refuses crashes and this seed's traffic crashed
+        return [_failed(job.cell, key, f"traffic crash: {error}") for key, _ in job.trackers], 0.0
     except SimrigError as error:
         raise BenchError(f"{where}: {error}") from None
     dataset_s = time.perf_counter() - started
@@ -104,8 +107,10 @@ def _evaluate(job: Job, work: Path) -> tuple[list[Outcome], float]:
                 scoring_started = time.perf_counter()
                 report = score(dataset, run.tracks, camera=entry.camera)
         except TrackerTimeout as error:  # the tracker's recorded failure on this cell; the bench goes on
-            outcomes.append(Outcome(job.cell, key, dict.fromkeys(METRIC_COLUMNS, math.nan), (), math.nan, 0.0,
-                                    failure=f"timeout: {error}"))
+            outcomes.append(_failed(job.cell, key, f"timeout: {error}"))
+            continue
+        except TrafficCrashError as error:  # other vehicles crashed in its drive's world, which the scenario refuses
+            outcomes.append(_failed(job.cell, key, f"traffic crash: {error}"))
             continue
         except TrackerFault as error:  # a user's tracker failing: the message names it and the frame
             raise BenchError(f"{where}, tracker {entry.name}: {error}") from error
@@ -113,10 +118,17 @@ def _evaluate(job: Job, work: Path) -> tuple[list[Outcome], float]:
             raise BenchError(f"{where}, tracker {entry.name}: {error}") from None
         except Exception as error:  # a user's tracker failing: keep its traceback as the cause
             raise BenchError(f"{where}, tracker {entry.name}: {type(error).__name__}: {error}") from error
+        if dataset is not None:  # else the drive's own world, counted by closed_loop_score
+            drive_values["traffic_crashes"] = float(traffic_crashes(dataset.ground_truth))
         outcomes.append(Outcome(job.cell, key, metric_values(report, drive_values), _cause_counts(report),
                                 step_s, time.perf_counter() - scoring_started,
                                 _scored_as(report, entry.camera), _camera_values(report)))
     return outcomes, dataset_s
+
+
+def _failed(cell: str, key: str, failure: str) -> Outcome:
+    """A tracker's row on a cell without metrics, saying why (``failure``)."""
+    return Outcome(cell, key, dict.fromkeys(METRIC_COLUMNS, math.nan), (), math.nan, 0.0, failure=failure)
 
 
 def metric_values(report: ScoreReport, drive: dict[str, float] | None = None) -> dict[str, float]:
@@ -126,7 +138,7 @@ def metric_values(report: ScoreReport, drive: dict[str, float] | None = None) ->
     overall2d = report.metrics2d["overall"]
     values = {f"3d_{name}": overall3d.get(name) for name in (*METRICS_3D, *PLANNER_METRICS)}
     values |= {f"2d_{name}": overall2d.get(name) for name in METRICS_2D}
-    values |= {name: (drive or {}).get(name) for name in DRIVE_COLUMNS}
+    values |= {name: (drive or {}).get(name) for name in (*DRIVE_COLUMNS, "traffic_crashes")}
     return {name: math.nan if value is None else float(value) for name, value in values.items()}
 
 

@@ -36,6 +36,7 @@ from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
 from simrig.reading import read_json
 from simrig.scenarios.schema import scenario_from_record
 from simrig.scoring.attribution import KINDS
+from simrig.scoring.drive_outcome import traffic_crashes
 from simrig.scoring.planner import PLANNER_METRICS
 from simrig.scoring.results import METRICS_2D, METRICS_3D
 from simrig.sensor.groups import all_groups, present_groups
@@ -380,6 +381,7 @@ def _document(scenario: str, dataset: Dataset, label: str, record: dict, chosen:
         "null_causes": [name for name in known if name not in present and name not in players],
         "kept_on": [name for name in present if name not in players],
         "metrics": game.metrics(chosen), "verdicts": verdicts["counts"],
+        "traffic_crashes": traffic_crashes(dataset.ground_truth),
         "command": shlex.join(words).replace("RUN_DIR", shlex.quote(str(run_dir))),
     }
 
@@ -451,8 +453,12 @@ def explain_table(document: dict) -> str:
 def _explain_markdown(document: dict, table: str | None = None) -> str:
     """``explain.md``: the table in a code block under the command that produced it."""
     table = explain_table(document) if table is None else table
+    crashes = document.get("traffic_crashes") or 0
+    crashed = (f"The traffic itself crashed {crashes} time{'s' * (crashes != 1)} in this world (collisions between "
+               "road users other than the ego: `simrig info` on the dataset lists them); no sensor cause removes "
+               "those, so errors around them stay in every coalition.\n\n") if crashes else ""
     return (f"### What each cause cost {document['label']}\n\nProduced by `{document['command']}`.\n\n"
-            f"```\n{table}\n```\n")
+            f"{crashed}```\n{table}\n```\n")
 
 
 def add_to_run_report(run_dir: Path | str, label: str, document: dict) -> Path:

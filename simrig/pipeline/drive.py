@@ -43,7 +43,7 @@ from simrig.pipeline.track import build_tracker, guarded_call, tracker_display, 
 from simrig.rig import build_rig
 from simrig.scenarios import Scenario
 from simrig.scenarios.timing_schema import timing_tables_set
-from simrig.scoring.drive_outcome import HARD_BRAKE_MPS2, NEAR_MISS_TTC_S, DriveOutcome, drive_outcome
+from simrig.scoring.drive_outcome import HARD_BRAKE_MPS2, NEAR_MISS_TTC_S, DriveOutcome, drive_outcome, traffic_crashes
 from simrig.scoring.inputs import class_ranges
 from simrig.types import OBSTACLE_ID, GroundTruthFrame, SensorFrame, Track
 
@@ -311,12 +311,15 @@ def closed_loop_score(scenario: Scenario, seed: int, tracker, params: dict | Non
     with tempfile.TemporaryDirectory(prefix="simrig-drive-") as work:
         result = drive(scenario, seed=seed, out=Path(work), tracker=tracker, params=params, frames=frames,
                        frame_time_limit_s=frame_time_limit_s)
-        report = score(Dataset.open(result.dataset), result.tracks) if scored else None
+        driven = Dataset.open(result.dataset)
+        report = score(driven, result.tracks) if scored else None
+        crashes = traffic_crashes(driven.ground_truth)
     outcome = result.outcome
     values = {
         "drive_collision": float(outcome.collisions > 0), "drive_near_misses": float(len(outcome.near_misses)),
         "drive_min_ttc_s": outcome.min_ttc_s, "drive_hard_brakes": float(len(outcome.hard_brakes)),
         "drive_progress_m": outcome.progress_m, "drive_progress_lost_m": reference.progress_m - outcome.progress_m,
+        "traffic_crashes": float(crashes),
     }
     return ClosedLoopScore(report, values, result.step_seconds)
 

@@ -17,7 +17,7 @@ from tqdm import tqdm
 from simrig.dataset import Dataset, DatasetWriter, check_output_folder
 from simrig.dataset.manifest import IMAGES_FOLDER, package_versions
 from simrig.dataset.tables import frame_columns
-from simrig.errors import DatasetError
+from simrig.errors import DatasetError, TrafficCrashError
 from simrig.geometry import Projection, project_boxes
 from simrig.interrupts import stop_if_interrupted
 from simrig.pipeline.content_keys import drive_key, world_key
@@ -31,7 +31,7 @@ from simrig.scoring.planner import PlanningRoad
 from simrig.scoring.truth_plans import TruthPlanner
 from simrig.seeding import RandomStreams
 from simrig.sensor.model import SensorModel
-from simrig.types import GroundTruthFrame
+from simrig.types import EGO_ID, OBSTACLE_ID, GroundTruthFrame
 from simrig.world import TrafficWorld
 
 
@@ -145,6 +145,7 @@ def generate(
             for frame in tqdm(range(frames), desc=scenario.name, unit="frame", disable=not progress):
                 stop_if_interrupted()
                 state, projection, visibility = world.frame(frame, times)
+                refuse_crashes(scenario, seed, state)
                 events.extend({"frame": state.frame, "event": name} for name in state.events)
                 if frame == 0 and world.markings is not None:
                     writer.write_json("road.json", world.markings.to_dict())
@@ -197,6 +198,21 @@ def generate(
         world.close()
     times.total = time.perf_counter() - started
     return GenerateResult(path=out, manifest=manifest, times=times)
+
+
+def refuse_crashes(scenario: Scenario, seed: int, state: GroundTruthFrame) -> None:
+    """A :class:`~simrig.errors.TrafficCrashError` when ``scenario`` refuses crashes (``traffic.crashes``) and two
+    road users other than the ego collided during the step to ``state``."""
+    if scenario.traffic.crashes != "refused":
+        return
+    crashes = [c for c in state.collisions if c.geometry and EGO_ID not in (c.first, c.second)]
+    if crashes:
+        first = crashes[0]
+        pair = (f"vehicle {first.second} and a fixed obstacle" if first.first == OBSTACLE_ID  # ids sorted: −2 first
+                else f"vehicles {first.first} and {first.second}")
+        raise TrafficCrashError(f"{scenario.name}: seed {seed}: {pair} collide at frame {state.frame}, and the "
+                                "scenario refuses crashes (traffic.crashes = \"refused\"): choose another seed, or "
+                                "allow them")
 
 
 class _TruthPlans:

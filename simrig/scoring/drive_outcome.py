@@ -64,6 +64,12 @@ class DriveOutcome:
                 "near_misses": list(self.near_misses), "hard_brakes": list(self.hard_brakes)}
 
 
+def traffic_crashes(truth: GroundTruth) -> int:
+    """How many collisions between road users other than the ego (two vehicles, or a vehicle and a fixed obstacle)
+    the world of ``truth`` had: the traffic's own crashes, not the ego's."""
+    return sum(1 for _, c in truth.collisions if c.geometry and EGO_ID not in (c.first, c.second))
+
+
 def drive_outcome(truth: GroundTruth) -> DriveOutcome:
     """The outcome of the drive whose ground truth is ``truth`` (module docstring)."""
     crashes = [(frame, c) for frame, c in truth.collisions if EGO_ID in (c.first, c.second)]
