@@ -158,6 +158,10 @@ def test_a_bench_records_a_refused_crash_as_that_cells_failure_and_counts_allowe
     if crashes == "refused":
         assert rows[0]["failure"].startswith("traffic crash: no_crash: seed 0: vehicles ")
         assert "collide at frame 18" in rows[0]["failure"] and rows[0]["3d_AMOTA"] is None  # NaN: null
+        from simrig.report import write_report
+
+        text = write_report(tmp_path / "bench").read_text()
+        assert "## Rows without metrics" in text and "| global_hungarian | no_crash | 0 | - | traffic crash: " in text
     else:
         assert rows[0]["failure"] is None and rows[0]["traffic_crashes"] == 1
 

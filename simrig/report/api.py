@@ -46,6 +46,7 @@ def write_report(results: Path | str, *, out: Path | str | None = None) -> Path:
                 shutil.copyfile(bench.folder / name, copy)
     lines = _header(bench, out)
     lines += _results_section(bench)
+    lines += _failures_section(bench)
     lines += _curves_section(bench, out)
     lines += _causes_section(bench)
     lines += cause_costs_section(bench.folder, bench.suite, [entry["name"] for entry in bench.trackers])
@@ -103,6 +104,19 @@ def _results_section(bench: BenchResults) -> list[str]:
                       "the evaluation region ignored, summed.", ""]
             lines += per_camera + [""]
     return lines
+
+
+def _failures_section(bench: BenchResults) -> list[str]:
+    """The rows without metrics and why (a timeout, a refused traffic crash); nothing when there are none."""
+    if "failure" not in bench.results.columns:
+        return []
+    failed = bench.results[bench.results["failure"].notna() & (bench.results["failure"] != "")]
+    if not len(failed):
+        return []
+    rows = [[row["tracker"], row["scenario"], str(row["seed"]), row["sweep"] or "-", row["failure"]]
+            for _, row in failed.iterrows()]
+    return (["## Rows without metrics", "", f"{len(failed)} of {len(bench.results)} rows have no metrics; the "
+             "tables above leave them out.", ""] + table(["tracker", "scenario", "seed", "sweep", "why"], rows) + [""])
 
 
 def _curves_section(bench: BenchResults, out: Path) -> list[str]:
