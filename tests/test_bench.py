@@ -266,3 +266,19 @@ def test_a_suite_without_base_points_reports_its_curves_and_no_empty_tables(smok
     text = write_report(bench, out=tmp_path / "report").read_text()
     assert "runs no scenario at its own settings (`base = false`)" in text
     assert "| tracker | scenarios | sequences |" not in text and "## Robustness curves" in text
+
+
+def test_an_infinite_metric_survives_the_fragment_a_finished_cell_is_kept_in(tmp_path):
+    """A drive where nothing ever closed in has least TTC inf, which JSON has no number for: the fragment keeps it
+    (and NaN as null), and the results read it back as inf."""
+    import math
+
+    from simrig.benchmark.evaluate import METRIC_COLUMNS, Outcome
+    from simrig.benchmark.results import _number, _read, write_fragment
+
+    metrics = dict.fromkeys(METRIC_COLUMNS, 0.5) | {"drive_min_ttc_s": math.inf, "3d_AMOTA": math.nan}
+    write_fragment(tmp_path, Outcome("cell", "key", metrics, (), 1.0, 1.0), 2.0)
+    back = {name: _number(value) for name, value in _read(tmp_path, "cell", "key")["metrics"].items()}
+    assert back["drive_min_ttc_s"] == math.inf and back["3d_AMOTA"] is None and back["2d_HOTA"] == 0.5
+    with pytest.raises(ValueError, match="'many': not a number"):
+        _number("many")

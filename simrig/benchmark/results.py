@@ -57,7 +57,7 @@ def write_fragment(out: Path, outcome: Outcome, dataset_s: float) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     write_json_atomic(path, {
         "cell": outcome.cell, "tracker_key": outcome.tracker_key,
-        "metrics": {name: None if math.isnan(value) else value for name, value in outcome.metrics.items()},
+        "metrics": {name: _json_number(value) for name, value in outcome.metrics.items()},
         "causes": [list(row) for row in outcome.causes],
         "failure": outcome.failure,
         "seconds": {name: None if math.isnan(value) else value for name, value in
@@ -65,6 +65,23 @@ def write_fragment(out: Path, outcome: Outcome, dataset_s: float) -> None:
         "scored": outcome.scored,
         "per_camera": outcome.per_camera,
     })
+
+
+def _json_number(value: float) -> float | str | None:
+    """A metric for a fragment's JSON: null for NaN, ``"inf"``/``"-inf"`` for an infinite value (a least time to
+    collision where nothing ever closed in), which JSON has no number for; :func:`_number` reads it back."""
+    if math.isnan(value):
+        return None
+    return value if math.isfinite(value) else ("inf" if value > 0 else "-inf")
+
+
+def _number(value: float | str | None) -> float | None:
+    """A fragment's metric as a number (:func:`_json_number`'s inverse)."""
+    if isinstance(value, str):
+        if value not in ("inf", "-inf"):
+            raise ValueError(f"bench fragment metric {value!r}: not a number, 'inf' or '-inf'")
+        return float(value)
+    return value
 
 
 def finished(out: Path) -> set[tuple[str, str]]:
@@ -93,7 +110,7 @@ def assemble(plan: Plan, out: Path) -> dict[str, pa.Table]:
             cameras += [head | {"camera": camera} | {name: values.get(name) for name in CAMERA_COLUMNS}
                         for camera, values in fragment.get("per_camera", {}).items()]
             settings = {PARAMETER_PREFIX + name: value for name, value in point.settings}
-            rows.append(head | settings | {name: fragment["metrics"].get(name) for name in METRIC_COLUMNS}
+            rows.append(head | settings | {name: _number(fragment["metrics"].get(name)) for name in METRIC_COLUMNS}
                         | {"failure": fragment.get("failure") or None})
             causes += [head | {"dimension": dim, "cause": cause, "kind": kind, "count": count}
                        for dim, cause, kind, count in fragment["causes"]]
