@@ -1,5 +1,6 @@
-"""Road layouts (issue 34): the long roads simrig builds keep their traffic alive, and each one's feature works —
-vehicles join from the ramps, leave by the exits, cross at the crossings, and come the other way on two-way roads."""
+"""Road layouts: the long roads simrig builds keep their traffic alive, and each one's feature works — vehicles join
+from the ramps, leave by the exits, cross at the crossings, and come the other way on two-way roads; their lines are
+painted only where lanes are."""
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ NEW_ROADS = ("merge_surround6", "intersection_surround6", "two_way_surround6", "
 @pytest.mark.slow  # 4 × 200 frames of traffic; CI's slow pass runs it
 @pytest.mark.parametrize("name", NEW_ROADS)
 def test_each_new_road_is_alive_for_200_frames(name):
-    """Check 1 of issue 34 at CI size (tests/perf/road_liveness.py runs 1,000 frames): vehicles in view in every
+    """At CI size (tests/perf/road_liveness.py runs 1,000 frames): vehicles in view in every
     frame, births and deaths in every 100 frames, speeds kept, no ego crash; crashes of others are events."""
     live = traffic_liveness(load_scenario(name), seed=0, frames=200)
     assert live.problems() == []
@@ -197,3 +198,42 @@ def test_a_side_vehicle_waits_at_its_stop_line_while_a_main_road_vehicle_would_a
         road.vehicles = [side, near]
         road._give_way()
         assert not getattr(side, "holding", False) and side.target_speed == 12.0
+
+
+def _inside_a_lane(world: TrafficWorld, point: np.ndarray, margin: float) -> bool:
+    """Whether a world point lies more than ``margin`` inside some lane, by highway-env's own lane coordinates."""
+    position = np.array([point[0], -point[1]])  # world Y = −y
+    for lane in world.env.unwrapped.road.network.lanes_list():
+        along, across = lane.local_coordinates(position)
+        if 0.0 < along < lane.length and abs(across) < lane.width_at(along) / 2.0 - margin:
+            return True
+    return False
+
+
+@pytest.mark.parametrize("name", ["intersection_surround6", "exit_surround6", "roundabout_surround6"])
+def test_no_painted_line_runs_through_a_lane(name):
+    """Junction boxes and exit mouths are not painted across: every point of every painted line, 0.5 m apart,
+    lies outside every lane's inside (0.3 m in from its borders: lines between lanes are on the border)."""
+    from simrig.road import dash_segments
+
+    world = _world(name)
+    world.reset()
+    markings = world.road_markings()
+    ego = world.ego.position
+    near = [line for line in markings.lines if np.hypot(*(line - [ego[0], -ego[1]]).T).min() < 250.0]
+    assert near
+    for line in near:
+        for a, b in dash_segments(line, False):
+            for t in np.linspace(0.0, 1.0, max(2, int(np.hypot(*(b - a)) / 0.5) + 1)):
+                assert not _inside_a_lane(world, a + t * (b - a), 0.3), (name, a + t * (b - a))
+
+
+def test_a_plain_highway_keeps_every_line_whole():
+    """With no junction, clipping removes nothing: each lane's two lines (none on the far edges' outsides) span
+    the lanes' whole length."""
+    world = _world("highway_surround6")
+    world.reset()
+    lanes = world.env.unwrapped.road.network.lanes_list()
+    painted = sum(np.hypot(*np.diff(line, axis=0).T).sum() for line in world.road_markings().lines)
+    expected = sum(lane.length * sum(kind != 0 for kind in lane.line_types) for lane in lanes)  # LineType.NONE = 0
+    assert painted == pytest.approx(expected, rel=1e-9)

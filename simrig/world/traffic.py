@@ -42,7 +42,6 @@ import types
 import gymnasium as gym
 import highway_env  # noqa: F401  (registers the environments)
 import numpy as np
-from highway_env.road.lane import LineType, StraightLane
 
 from simrig.scenarios.perturbation_schema import CutIn, LeadBrake, Occluder, Stalled
 from simrig.scenarios.schema import TrafficConfig
@@ -52,6 +51,7 @@ from ..types import EGO_ID, ActorClass, Collision, EgoPose, GroundTruthFrame
 from .collisions import CollisionWatch
 from .ego_planner import drive_on_perception
 from .layouts import LIMIT_MARGIN_MPS, build_layout, lane_samples
+from .markings import road_markings
 from .phantoms import phantoms_from_boxes
 from .vehicles import VEHICLE_TYPES, SimrigVehicle
 
@@ -477,24 +477,10 @@ class TrafficWorld:
         return vehicle, f"{name} spawned id={vehicle.simrig_id} lane {lane_id}{note}{removed}"
 
     def road_markings(self) -> RoadMarkings:
-        """The painted lines of the road network in the world frame (for colour renders and plots).
-
-        Straight lanes give two-point lines; curved ones are sampled every 2 m. Call after :meth:`reset`.
-        """
-        lines, dashed = [], []
-        for lane in self.env.unwrapped.road.network.lanes_list():
-            length = lane.length
-            samples = np.array([0.0, length]) if isinstance(lane, StraightLane) else np.linspace(
-                0.0, length, max(2, int(np.ceil(length / 2.0)) + 1)
-            )
-            for side, line_type in zip((-0.5, 0.5), lane.line_types, strict=True):
-                if line_type == LineType.NONE:
-                    continue
-                points = np.array([lane.position(s, side * lane.width_at(s)) for s in samples])
-                lines.append(np.stack([points[:, 0], -points[:, 1]], axis=1))  # world: Y = −y
-                dashed.append(line_type == LineType.STRIPED)
+        """The painted lines of the road network in the world frame, where lanes are (for colour renders and
+        plots; :mod:`simrig.world.markings`). Call after :meth:`reset`."""
         ego = self.ego.position
-        return RoadMarkings(tuple(lines), tuple(dashed), centre=(float(ego[0]), float(-ego[1])))
+        return road_markings(self.env.unwrapped.road.network, centre=(float(ego[0]), float(-ego[1])))
 
     # ------------------------------------------------------------------ ground truth
     def _state(self, events: tuple[str, ...], collisions: tuple[Collision, ...] = ()) -> GroundTruthFrame:
