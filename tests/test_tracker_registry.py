@@ -32,3 +32,20 @@ def test_a_name_cannot_be_taken_twice_and_a_factory_must_build_a_tracker():
     tracker.register("test-bad", lambda: object())
     with pytest.raises(TypeError, match="no reset/step"):
         tracker.create("test-bad")
+
+
+def test_building_one_tracker_imports_no_other():
+    """Trackers are imported when first asked for: a ``saga`` run pays for no other tracker's modules (nor what
+    they import); listing the trackers imports none."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom simrig.trackers import available, create\nnames = available()\n"
+            "listed = sorted(m for m in sys.modules if m.startswith('simrig.trackers.'))\ncreate('saga')\n"
+            "print(names)\nprint(listed)\nprint(sorted(m for m in sys.modules if m.startswith('simrig.trackers.')))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    names, listed, after = (eval(line) for line in done.stdout.splitlines())  # noqa: S307  (our own printout)
+    assert "saga" in names and "sort" in names
+    assert listed == ["simrig.trackers.errors", "simrig.trackers.protocol", "simrig.trackers.registry"]
+    others = {f"simrig.trackers.{name}" for name in names} - {"simrig.trackers.saga"}
+    assert "simrig.trackers.saga" in after and not others & set(after)

@@ -12,39 +12,22 @@ learned association in place of the Mahalanobis gate, trained on simrig data), a
 with late, relabelled or velocity-noisy output, for studies of what errors cost).
 """
 
-from .botsort import botsort
-from .bytetrack import bytetrack
-from .collabmot import collabmot
-from .deepsort import deepsort
-from .degraded import degraded
 from .errors import TrackerInputError
-from .global_hungarian import global_hungarian
-from .learned import learned
-from .mutr3d import mutr3d
-from .percam_merge import percam_merge
-from .polymot import polymot
 from .protocol import Tracker
-from .registry import available, create, parameters, register
-from .saga import saga
-from .simpletrack import simpletrack
-from .sort import sort
+from .registry import available, create, parameters, register, register_lazily
 
-for _name, _factory in (
-    ("saga", saga),
-    ("global_hungarian", global_hungarian),
-    ("percam_merge", percam_merge),
-    ("simpletrack", simpletrack),
-    ("sort", sort),
-    ("deepsort", deepsort),
-    ("collabmot", collabmot),
-    ("mutr3d", mutr3d),
-    ("polymot", polymot),
-    ("bytetrack", bytetrack),
-    ("botsort", botsort),
-    ("learned", learned),
-    ("degraded", degraded),
-):
-    register(_name, _factory)
+REFERENCE_FACTORIES = {
+    name: f"{__name__}.{module}:{name}" for name, module in (
+        ("saga", "saga"), ("global_hungarian", "global_hungarian"), ("percam_merge", "percam_merge"),
+        ("simpletrack", "simpletrack"), ("sort", "sort"), ("deepsort", "deepsort"), ("collabmot", "collabmot"),
+        ("mutr3d", "mutr3d"), ("polymot", "polymot"), ("bytetrack", "bytetrack"), ("botsort", "botsort"),
+        ("learned", "learned"), ("degraded", "degraded"),
+    )
+}
+"""Name → ``module:factory`` of every tracker simrig registers; each module is imported when its tracker is first
+asked for, so a ``saga`` run imports no other tracker (nor what they need: ``scipy.stats``, the learned model)."""
+for _name, _reference in REFERENCE_FACTORIES.items():
+    register_lazily(_name, _reference)
 
 TRAINED_ON_SIMRIG = ("learned",)
 """Registered trackers whose model was trained on simrig data: not reference trackers (the papers' methods and the

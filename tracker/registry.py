@@ -21,6 +21,9 @@ from .protocol import Tracker
 
 ENTRY_POINT_GROUP = "simrig.trackers"
 _FACTORIES: dict[str, Callable[..., Tracker]] = {}
+_LAZY: dict[str, str] = {}
+"""name → ``module:attribute`` of a factory imported when the tracker is first asked for (simrig's own trackers,
+entry points): a command imports only the trackers it runs."""
 _REGISTERED_HERE: dict[str, str] = {}
 """name → ``module:qualname`` of a factory a user registered with :func:`register` in this process."""
 
@@ -29,12 +32,29 @@ def register(name: str, factory: Callable[..., Tracker], *, replace: bool = Fals
     """Make ``factory(**params)`` available as tracker ``name``; registering a taken name is an error."""
     if not name or not isinstance(name, str):
         raise ValueError(f"tracker name must be a non-empty string, got {name!r}")
+    if name in _LAZY and not replace:
+        raise ValueError(f"tracker {name!r} is already registered")
     if name in _FACTORIES and not replace and _FACTORIES[name] is not factory:
         raise ValueError(f"tracker {name!r} is already registered")
+    _LAZY.pop(name, None)
     _FACTORIES[name] = factory
     module = getattr(factory, "__module__", None) or ""
     if not module.startswith(__name__.rpartition(".")[0] + "."):  # a user's tracker, not one of simrig's
         _REGISTERED_HERE[name] = f"{module}:{getattr(factory, '__qualname__', '')}"
+
+
+def register_lazily(name: str, reference: str) -> None:
+    """Make the factory at ``reference`` (``module:attribute``) tracker ``name``, imported when first asked for."""
+    if name in _FACTORIES or name in _LAZY:
+        raise ValueError(f"tracker {name!r} is already registered")
+    _LAZY[name] = reference
+
+
+def _factory(name: str) -> Callable[..., Tracker] | None:
+    """The factory of ``name``, imported now if it was registered lazily; None when unknown."""
+    if name not in _FACTORIES and name in _LAZY:
+        _FACTORIES[name] = imported(_LAZY.pop(name))
+    return _FACTORIES.get(name)
 
 
 def registered_here(name: str) -> str | None:
@@ -48,7 +68,7 @@ def register_again(name: str, reference: str) -> None:
     """In another process, register ``name`` as the factory at ``reference`` (``module:qualname``, from
     :func:`registered_here`), unless the name is already known there."""
     _load_entry_points()
-    if name not in _FACTORIES:
+    if name not in _FACTORIES and name not in _LAZY:
         _FACTORIES[name] = imported(reference)
 
 
@@ -65,24 +85,24 @@ def imported(reference: str):
 
 
 def _load_entry_points() -> None:
+    """Know every entry point's tracker by name (imported when first asked for)."""
     for entry in metadata.entry_points(group=ENTRY_POINT_GROUP):
-        if entry.name not in _FACTORIES:
-            _FACTORIES[entry.name] = entry.load()
+        if entry.name not in _FACTORIES and entry.name not in _LAZY:
+            _LAZY[entry.name] = entry.value
 
 
 def available() -> list[str]:
-    """Names of every registered tracker, sorted."""
+    """Names of every registered tracker, sorted (nothing is imported)."""
     _load_entry_points()
-    return sorted(_FACTORIES)
+    return sorted(set(_FACTORIES) | set(_LAZY))
 
 
 def create(name: str, **params) -> Tracker:
     """A new tracker ``name`` built with ``params``; ``KeyError`` naming the known trackers if unknown."""
     _load_entry_points()
-    try:
-        factory = _FACTORIES[name]
-    except KeyError:
-        known = ", ".join(sorted(_FACTORIES)) or "none registered"
+    factory = _factory(name)
+    if factory is None:
+        known = ", ".join(available()) or "none registered"
         raise KeyError(f"unknown tracker {name!r}; known: {known} (a tracker of your own is known by name to every "
                        f"simrig command once registered by entry point, group {ENTRY_POINT_GROUP!r} in your "
                        "package's pyproject.toml; or name it as module:attribute)") from None
@@ -97,10 +117,11 @@ def parameters(name: str) -> dict[str, object]:
     """The keyword parameters tracker ``name`` takes, with their defaults (``inspect.Parameter.empty`` when
     required)."""
     _load_entry_points()
-    if name not in _FACTORIES:
+    factory = _factory(name)
+    if factory is None:
         create(name)  # raises the KeyError naming the known trackers
     try:
-        signature = inspect.signature(_FACTORIES[name])
+        signature = inspect.signature(factory)
     except (TypeError, ValueError):
         return {}
     return {
