@@ -198,3 +198,13 @@ def test_a_3d_failure_metric_for_a_2d_tracker_is_one_line_naming_key_and_file(tm
     error = capsys.readouterr().err
     assert error.count("\n") == 1 and f"{space}: objective.failure.metric '3d_IDS' is a 3D metric" in error
     assert "tracker 'sort' reports no 3D tracks" in error and not (tmp_path / "out" / "report.md").exists()
+
+
+def test_search_without_optuna_says_how_to_install_it(monkeypatch):
+    """optuna is the ``search`` extra, not a dependency of every install: without it, one line with the pip
+    command, before any work."""
+    from simrig.search.run import SearchError, run_search
+
+    monkeypatch.setitem(sys.modules, "optuna", None)  # import optuna raises ImportError
+    with pytest.raises(SearchError, match=r"simrig search needs optuna.*pip install 'simrig-mot\[search\]'"):
+        run_search("occlusion_gaps")

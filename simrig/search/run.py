@@ -79,6 +79,7 @@ def run_search(space: SearchSpace | str | Path, *, sampler: str = "tpe", seed: i
         raise SearchError(f"--engine {engine!r}: choose one of {', '.join(ENGINES)}")
     if workers < 1:
         raise SearchError(f"--workers {workers}: must be at least 1")
+    require_optuna()
     if not isinstance(space, SearchSpace):
         space = load_space(space)
     out = Path(out) if out is not None else Path("runs") / "search" / path_part(space.config.name, "search space name")
@@ -89,6 +90,16 @@ def run_search(space: SearchSpace | str | Path, *, sampler: str = "tpe", seed: i
     with folder_lock(out, "simrig search"):
         return _run(space, sampler, seed, (engine, workers, address), out, cache, baseline, shrink_budget,
                     stop_at_failure, progress, command)
+
+
+def require_optuna() -> None:
+    """A :class:`SearchError` saying how to install the search's samplers when optuna (the ``search`` extra) is
+    missing: only ``simrig search`` needs it."""
+    try:
+        import optuna  # noqa: F401
+    except ImportError:
+        raise SearchError("simrig search needs optuna, which is not installed: pip install 'simrig-mot[search]' "
+                          "(from a checkout: pip install -e '.[search]')") from None
 
 
 def _settings(space: SearchSpace, sampler: str, seed: int, baseline: bool, stop_at_failure: bool) -> dict:
