@@ -31,7 +31,7 @@ from simrig.dataset import Dataset
 from simrig.dataset.manifest import write_json_atomic
 from simrig.dataset.outputs import check_own_folder, write_text_atomic
 from simrig.dataset.reader import frame_detections
-from simrig.dataset.run_folder import REPORT
+from simrig.dataset.run_folder import DATASET_DIR, REPORT, TRACKS_DIR
 from simrig.dataset.tracks_file import TrackTables, write_tracks
 from simrig.dataset.writer import arrow_table
 from simrig.errors import DatasetError, SimrigError
@@ -85,12 +85,12 @@ def drive(scenario: Scenario, *, seed: int, out: Path | str, tracker=None, param
         built = build_tracker(tracker, params)
         perception = _TrackerPerception(built, tracker_display(tracker), tracker_reference(tracker), params, rig,
                                         seed, scenario, frame_time_limit_s)
-    generate(scenario, seed=seed, out=out / "dataset", frames=frames, overwrite=overwrite, progress=progress,
+    generate(scenario, seed=seed, out=out / DATASET_DIR, frames=frames, overwrite=overwrite, progress=progress,
              driver=perception)
-    dataset = Dataset.open(out / "dataset")
+    dataset = Dataset.open(out / DATASET_DIR)
     tracks = None
     if isinstance(perception, _TrackerPerception):
-        tracks = write_tracks(out / "tracks", perception.tables.tables(), made_on=dataset.identity)
+        tracks = write_tracks(out / TRACKS_DIR, perception.tables.tables(), made_on=dataset.identity)
     return DriveResult(perception.record["perception"], dataset.path, tracks, drive_outcome(dataset.ground_truth),
                        getattr(perception, "step_seconds", 0.0), time.perf_counter() - started)
 
@@ -199,7 +199,7 @@ def drive_folder(scenario: Scenario, *, seed: int, tracker, out: Path | str, par
     check_own_folder(out, what="drive folder", marker=REPORT, made=(REFERENCE_DIR, DRIVES_DIR))
     reference_dir = out / REFERENCE_DIR
     key = drive_key(scenario, seed, frames, _TruthPerception.record)
-    held = _drive_manifest(reference_dir / "dataset")
+    held = _drive_manifest(reference_dir / DATASET_DIR)
     if held is not None and held.get("world_key") != key:
         raise DriveError(f"{out}: holds the drives of {held['scenario']['name']!r}, seed {held['seed']}, "
                          f"{held['frames']} frames; drives compared in one folder share the scenario, seed and "
@@ -238,7 +238,7 @@ def _drive_manifest(dataset: Path) -> dict | None:
 
 
 def _read_drive(folder: Path, perception: str) -> DriveResult:
-    dataset = Dataset.open(folder / "dataset")
+    dataset = Dataset.open(folder / DATASET_DIR)
     return DriveResult(perception, dataset.path, None, drive_outcome(dataset.ground_truth), 0.0, 0.0)
 
 
