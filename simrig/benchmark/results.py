@@ -17,12 +17,13 @@ which cells finished, so every engine writes the same bytes.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import pyarrow as pa
 import pyarrow.parquet as pq
+
+from simrig.reading import read_json
 
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import atomic_file
@@ -92,7 +93,7 @@ def finished(out: Path) -> set[tuple[str, str]]:
 def _read(out: Path, cell: str, key: str) -> dict:
     path = fragment_path(out, cell, key)
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        return read_json(path, "bench fragment", ValueError)
     except (OSError, ValueError) as error:
         raise FileNotFoundError(f"bench fragment {str(path)!r} is missing or unreadable: {error}") from None
 

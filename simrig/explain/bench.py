@@ -15,6 +15,7 @@ import pyarrow.parquet as pq
 from simrig.dataset import Dataset
 from simrig.dataset.outputs import atomic_file
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
+from simrig.reading import read_json
 from simrig.scenarios.schema import scenario_from_record
 from simrig.sensor.groups import present_groups
 
@@ -64,7 +65,7 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
     ``out/explain-cache/CELL``."""
     out = Path(out)
     try:
-        description = json.loads((out / BENCH_FILE).read_text(encoding="utf-8"))
+        description = read_json(out / BENCH_FILE, BENCH_FILE, ValueError)
     except (OSError, ValueError) as error:
         raise ExplainError(f"{out}: not a finished bench folder ({error})") from None
     if not description.get("complete") or not (out / RESULTS).is_file():

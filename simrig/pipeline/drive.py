@@ -19,7 +19,6 @@ tracker's frames would need the delivery schedule) and a 2D-only tracker (the pl
 
 from __future__ import annotations
 
-import json
 import tempfile
 import time
 from dataclasses import dataclass
@@ -40,6 +39,7 @@ from simrig.pipeline.generate import generate
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S, checked_tracks
 from simrig.pipeline.run import command_line, run_label
 from simrig.pipeline.track import build_tracker, guarded_call, tracker_display, tracker_reference
+from simrig.reading import read_json
 from simrig.rig import build_rig
 from simrig.scenarios import Scenario
 from simrig.scenarios.timing_schema import timing_tables_set
@@ -250,7 +250,7 @@ def drive_report(out: Path) -> str:
     for folder in folders:
         path = folder / OUTCOME_FILE
         if path.is_file():
-            rows.append(json.loads(path.read_text(encoding="utf-8")))
+            rows.append(read_json(path, OUTCOME_FILE, DriveError))
     if not rows:
         return "# Drives\n\nNo drive has finished in this folder yet.\n"
     first = rows[0]

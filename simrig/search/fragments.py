@@ -8,10 +8,11 @@ Fragments are the unit of resumption: a rerun reads them back and runs only what
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
+
+from simrig.reading import read_json
 
 from ..dataset.manifest import write_json_atomic
 
@@ -56,7 +57,7 @@ def read_evaluations(out: Path, stream: str) -> dict[int, Evaluation]:
     found = {}
     for path in sorted((out / FOLDER / stream).glob("*.json")):
         try:
-            raw = json.loads(path.read_text(encoding="utf-8"))
+            raw = read_json(path, "search fragment", ValueError)
         except (OSError, ValueError) as error:
             raise FileNotFoundError(f"search fragment {str(path)!r} is unreadable ({error}); delete it to run "
                                     "that evaluation again") from None

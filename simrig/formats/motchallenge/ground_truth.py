@@ -87,7 +87,8 @@ def _sequence_folders(src: Path) -> tuple[str, list[Path]]:
         src = benchmarks[0]
     seqmap = src.parent / "seqmaps" / f"{src.name}.txt"
     if seqmap.is_file():
-        names = [line.strip() for line in seqmap.read_text().splitlines()[1:] if line.strip()]
+        text = read_capped(seqmap, "seqmap", SourceError).decode("utf-8", errors="replace")
+        names = [line.strip() for line in text.splitlines()[1:] if line.strip()]
         folders = [src / name for name in names]
         for folder in folders:
             if not (folder / "gt" / "gt.txt").is_file():
