@@ -134,7 +134,7 @@ def test_run_generates_tracks_scores_and_reports_with_the_command(tmp_path, caps
 
 
 def test_a_second_tracker_reuses_the_matching_dataset_and_writes_its_own_tracks_and_score(tmp_path, capsys):
-    """Issue 17: ``run … --tracker saga --out R`` then ``… --tracker sort --out R``: the second reuses the
+    """``run … --tracker saga --out R`` then ``… --tracker sort --out R``: the second reuses the
     dataset (and says so), writes its own tracks and score, and leaves the first run's files as they were."""
     out = tmp_path / "R"
     common = ["run", "highway_stereo", "--frames", "12", "--seed", "0", "--out", str(out), "--quiet"]

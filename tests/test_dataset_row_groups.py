@@ -1,4 +1,4 @@
-"""Long datasets are read a Parquet row group at a time (issue 23, check 8: bounded memory). The records must not
+"""Long datasets are read a Parquet row group at a time (bounded memory). The records must not
 depend on where the row groups split: a dataset written in groups of 5 frames reads back exactly as the same
 dataset written in one group, and each sensor frame holds exactly the detection rows of its frame."""
 

@@ -161,7 +161,7 @@ def test_explaining_an_unfinished_bench_is_one_line(tmp_path, capsys):
 
 def test_a_tracker_that_times_out_in_the_bench_is_left_out_and_the_others_are_explained(tmp_path, monkeypatch,
                                                                                            capsys):
-    # Issue 23's hanging tracker: the bench records its timeout; --explain used to run it again on every
+    # A hanging tracker: the bench records its timeout; --explain used to run it again on every
     # counterfactual and stopped the whole explanation at its first timeout.
     from pathlib import Path
 

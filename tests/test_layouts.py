@@ -141,7 +141,7 @@ rigs = ["stereo"]
 
 @pytest.mark.slow  # the default pass stays under 10 minutes; CI runs the slow pass too
 def test_another_process_generates_the_same_bytes_for_each_new_road(tmp_path):
-    """Check 4 of issue 34, across processes: each new scenario's dataset, manifest included, from a fresh process
+    """Across processes: each new scenario's dataset, manifest included, from a fresh process
     equals this process's."""
     import os
     import subprocess
@@ -161,7 +161,7 @@ def test_another_process_generates_the_same_bytes_for_each_new_road(tmp_path):
 
 @pytest.mark.slow
 def test_the_new_roads_give_the_same_bench_bytes_on_the_local_pool_and_ray(tmp_path):
-    """Check 4 of issue 34, across engines."""
+    """Across engines."""
     assert_same_bench_bytes(ROADS_SUITE, tmp_path)
 
 

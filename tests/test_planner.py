@@ -1,4 +1,4 @@
-"""Planner-aware scores (issue 31, open loop): the ego's own IDM/MOBIL asked on the ground truth and on the tracks.
+"""Planner-aware scores (open loop): the ego's own IDM/MOBIL asked on the ground truth and on the tracks.
 
 Expected values come from IDM and MOBIL worked by hand on a one-vehicle road, from the real ego's own commands in a
 simulated run, and from invariants of the planner (it reads only the leader and follower in its own and the side

@@ -1,4 +1,4 @@
-"""The world perturbations added for planner-aware scores (issue 31): a lead vehicle braking hard and a stalled
+"""The world perturbations added for planner-aware scores: a lead vehicle braking hard and a stalled
 vehicle, checked on the ground truth they produce."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Benchmark: ``simrig generate --space`` at scale (issue 35, check 1).
+"""Benchmark: ``simrig generate --space`` at scale.
 
     python tests/perf/collection.py [--space traffic_mix] [--count 2000] [--workers 2] [--no-ray]
 

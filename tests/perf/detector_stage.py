@@ -7,7 +7,7 @@ Run explicitly (not part of the test suite)::
 Both versions run ``simrig generate`` on ``highway_surround6`` (40 vehicles, six cameras, the catalog's detector
 ``bevformer_small``) with visibility rendering off, alternating (now, before, now, before, …) so that machine
 noise hits both; the sensor stage's seconds are read from each run's ``time`` line and divided by the frame
-count. Target (issue 29): at most 4 ms per frame. The table is printed and written to
+count. Target: at most 4 ms per frame. The table is printed and written to
 ``reports/perf/detector_stage.md``.
 """
 

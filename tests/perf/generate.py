@@ -12,8 +12,8 @@ Both sides start from the same populated highway (``highway_surround6``: 40 vehi
   rendering is measured by ``tests/perf/visibility.py``.
 
 Runs alternate (bare, generate, bare, generate, ...) so that machine noise hits both; the table reports
-medians and the overhead ratio. Target (issue 2): generate adds at most 30% over bare stepping; the sensor
-model's ms per frame at 40 vehicles × 6 cameras (issue 18): at most 4 ms. ``--preset`` runs the detector
+medians and the overhead ratio. Target: generate adds at most 30% over bare stepping; the sensor
+model's ms per frame at 40 vehicles × 6 cameras: at most 4 ms. ``--preset`` runs the detector
 preset of that name instead of the scenario's. The table is printed and written to
 ``reports/perf/generate.md`` (``generate-PRESET.md`` with ``--preset``).
 """
@@ -97,8 +97,8 @@ def main() -> int:
     overhead = bare_fps / full_fps - 1.0
     per_frame_ms = {name: 1000 * statistics.median(values) / args.frames for name, values in (
         ("traffic (highway-env + window upkeep)", traffic), ("projection (6 cameras)", projection),
-        (f"sensor model ({args.preset or 'scenario detector'}; no rendering; issue 18 target ≤ 4 ms)", sensor),
-        (f"{PLANS} (the ground truth's plans, issue 31)", plans),
+        (f"sensor model ({args.preset or 'scenario detector'}; no rendering; target ≤ 4 ms)", sensor),
+        (f"{PLANS} (the ground truth's plans)", plans),
         ("writing (Parquet, hashes, manifest)", writing),
     )}
     foundation_ms = sum(ms for name, ms in per_frame_ms.items() if not name.startswith(("sensor", PLANS)))
@@ -118,8 +118,8 @@ def main() -> int:
         f"| `simrig generate` (everything) | {full_fps:.1f} | {1000 / full_fps:.2f} |",
         *(f"| &nbsp;&nbsp;of which {name} | | {ms:.2f} |" for name, ms in per_frame_ms.items()),
         "",
-        f"Overhead of generate over bare stepping: **{overhead * 100:+.1f}%** (issue 2's target: at most +30%; "
-        f"{'met' if overhead <= 0.30 else 'MISSED'}). Issue 2's target was set for the foundation alone (traffic, "
+        f"Overhead of generate over bare stepping: **{overhead * 100:+.1f}%** (target: at most +30%; "
+        f"{'met' if overhead <= 0.30 else 'MISSED'}). The target was set for the foundation alone (traffic, "
         f"projection, writing: {foundation_overhead * 100:+.1f}%); the sensor model and the plans added since then are "
         "listed separately.",
         "",

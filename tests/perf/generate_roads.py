@@ -1,4 +1,4 @@
-"""Benchmark: ``simrig generate`` on each road layout next to the highway (issue 34, check 5).
+"""Benchmark: ``simrig generate`` on each road layout next to the highway.
 
     python tests/perf/generate_roads.py [--frames 200] [--repeats 2]
 

@@ -1,4 +1,4 @@
-"""Report: the learned association against saga, polymot and global_hungarian (issue 35, check 3).
+"""Report: the learned association against saga, polymot and global_hungarian.
 
 Run explicitly, on the results of the ``learned`` suite::
 

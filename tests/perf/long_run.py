@@ -1,4 +1,4 @@
-"""Long-run check (issue 23, check 8): traffic keeps flowing for 5,000 frames and every crash is an event.
+"""Long-run check: traffic keeps flowing for 5,000 frames and every crash is an event.
 
 Run explicitly (not part of the test suite)::
 
@@ -127,7 +127,7 @@ def main() -> int:
         "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|",
         *rows,
         "",
-        f"Check 8 of issue 23 for simrig now: {'PASSES' if all_ok else 'FAILS'}." if "now" in versions else "",
+        f"The long-run check for simrig now: {'PASSES' if all_ok else 'FAILS'}." if "now" in versions else "",
         "",
     ]
     text = "\n".join(lines)

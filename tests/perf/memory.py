@@ -1,4 +1,4 @@
-"""Memory check (issue 23, check 8): peak RSS of ``generate``, ``track`` and ``score`` at 5,000 frames of
+"""Memory check: peak RSS of ``generate``, ``track`` and ``score`` at 5,000 frames of
 ``highway_surround6`` (rendering off) against 500 frames; the target is at most 1.5×.
 
 Run explicitly (not part of the test suite)::
@@ -181,7 +181,7 @@ def main() -> int:
         f"Machine: {machine()}. Peak RSS [MiB] of each CLI command run alone in its own child process "
         "(`ru_maxrss` of that child from `os.wait4`), with its wall time and the commit it was measured at "
         "(`+`: with uncommitted changes); with `--repeats`, the highest peak and the shortest time of the runs "
-        f"(`×n`). Target (issue 23, check 8): {long} frames within {TARGET}× of {short}.",
+        f"(`×n`). Target: {long} frames within {TARGET}× of {short}.",
         "",
         "| simrig | command | " + " | ".join(f"{frames} frames" for frames in lengths) + f" | {long}/{short} |",
         "|---|---|" + "---:|" * (len(lengths) + 1),
@@ -189,7 +189,7 @@ def main() -> int:
         "",
         *(f"- {line}" for line in checks),
         "" if checks else "",
-        f"Check 8 (memory) of issue 23 for simrig now: {'PASSES' if all_ok else 'FAILS'}.",
+        f"The memory check for simrig now: {'PASSES' if all_ok else 'FAILS'}.",
         "",
     ]
     publish(lines, args.report)

@@ -1,4 +1,4 @@
-"""Benchmark: what the planner-aware scores cost (issue 31, check 5).
+"""Benchmark: what the planner-aware scores cost.
 
     python tests/perf/planner.py
 
@@ -109,7 +109,7 @@ def main() -> int:
     try:
         lines = ["# Planner-aware scores: cost", "",
                  f"Produced by `{command_line()}` ({machine()}); medians of {REPEATS} alternating repeats. "
-                 "Targets (issue 31): the open-loop planner ≤ 1 ms per frame; a drive ≤ 1.5× generate + track.", "",
+                 "Targets: the open-loop planner ≤ 1 ms per frame; a drive ≤ 1.5× generate + track.", "",
                  *open_loop(work), "", *closed_loop(work), ""]
         publish(lines, OUT)
     finally:

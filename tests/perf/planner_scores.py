@@ -1,4 +1,4 @@
-"""Report: the planner-aware scores next to HOTA and AMOTA for every 3D reference tracker (issue 31, check 2).
+"""Report: the planner-aware scores next to HOTA and AMOTA for every 3D reference tracker.
 
 Run explicitly, on the results of the ``planner`` suite (the surround catalog, ten fresh seeds)::
 

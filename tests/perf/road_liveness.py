@@ -1,4 +1,4 @@
-"""Long runs of the road layouts (issue 34, check 1): is the traffic alive for 1,000 frames?
+"""Long runs of the road layouts: is the traffic alive for 1,000 frames?
 
     python tests/perf/road_liveness.py [--frames 1000] [--seeds 100 101 102] [--scenarios ...]
 

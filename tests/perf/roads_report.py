@@ -1,4 +1,4 @@
-"""Report: every reference tracker on the road layouts (issue 34, check 3).
+"""Report: every reference tracker on the road layouts.
 
 Run explicitly, on the results of the ``roads`` suite and of the ``planner`` suite (for the highway at the same
 fresh seeds)::

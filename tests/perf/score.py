@@ -21,7 +21,7 @@ Run explicitly (not part of the test suite)::
    rewritten with ``pandas.concat`` (it calls ``DataFrame.append``, removed in pandas 2). Without the devkit
    the 3D part reports simrig alone.
 
-Targets (issue 4): 2D at least 3× faster than TrackEval; AMOTA on 10,000 boxes in under 2 s. Runs alternate
+Targets: 2D at least 3× faster than TrackEval; AMOTA on 10,000 boxes in under 2 s. Runs alternate
 between the two sides; the table reports the best of ``--repeats`` and the value differences, and is written
 to ``reports/perf/score.md``.
 """

@@ -17,7 +17,7 @@ distractors), imported with ``simrig import --format motchallenge``. Timed, alte
 Warm: in one process each side scores the case ``--warm`` times after a first call; the best warm call is
 reported. Also: the largest difference between simrig's and TrackEval's 2D metrics, and the simrig modules that
 ``python -X importtime`` shows the scoring path importing from ``simrig.trackers`` or ``simrig.pipeline``
-(there should be none). Targets (issue 32): simrig faster than TrackEval on the first call, at least 3× faster
+(there should be none). Targets: simrig faster than TrackEval on the first call, at least 3× faster
 warm. The table is printed and written to ``reports/perf/score_first_call.md``.
 """
 

@@ -15,7 +15,7 @@ Run explicitly (not part of the test suite)::
    ``step()`` over the frames of ``highway_surround6`` (40 vehicles,
    seed 0), frames read into memory first (reading is not timed); frames per second, median of repeats.
 
-Targets (issue 5): FOTA association under 2 ms; ``saga`` at least 100 frames per second. Written to
+Targets: FOTA association under 2 ms; ``saga`` at least 100 frames per second. Written to
 ``reports/perf/track.md``.
 """
 

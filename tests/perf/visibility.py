@@ -1,5 +1,5 @@
 """Benchmark: the cost of visibility (segmentation render + analytic silhouettes), one draw call per camera
-against the node-per-actor pyrender renderer it replaced (issue 16), side by side in one run.
+against the node-per-actor pyrender renderer it replaced, side by side in one run.
 
 Run explicitly (not part of the test suite)::
 
@@ -13,7 +13,7 @@ peer) in alternating order — and for the analytic silhouettes. Every frame's c
 are compared; any difference is reported.
 
 Part 2, frames per second of the whole ``simrig generate`` with visibility off, on, and on with the previous
-renderer patched in, runs alternating so that machine noise hits all; medians. Target (issue 3): with
+renderer patched in, runs alternating so that machine noise hits all; medians. Target: with
 visibility on at the default resolution, at least 4 frames per second. The table is printed and written
 to ``reports/perf/visibility.md``.
 """
