@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, model_serializer, model_validator
+from pydantic import Field, ValidationError, model_serializer, model_validator
 
 from .base import FiniteFloat, NonNegativeFloat, PathName, PositiveFloat, Strict, set_keys
 from .evaluation_schema import EvaluationConfig
@@ -256,11 +256,23 @@ def windows_outside(scenario: Scenario, frames: int) -> list[str]:
     return messages
 
 
-def scenario_from_record(record: dict) -> Scenario:
+def scenario_from_record(record: dict, source: str = "a recorded scenario") -> Scenario:
     """The :class:`Scenario` of a resolved dump (``model_dump(mode="json")``, as a dataset manifest records
     it): the keys a setting refuses when written by hand are dropped — the rig keys its preset does not take,
     and the lane count of a map other than highway-v0 or of a layout (the dump holds every field; their values
-    there are the defaults, which the preset or map ignores) — everything else validated as usual."""
+    there are the defaults, which the preset or map ignores) — everything else validated as usual. An invalid
+    record (an edited manifest) is a :class:`~simrig.scenarios.ScenarioError` naming ``source`` and the setting."""
+    from . import ScenarioError, describe_errors
+
+    try:
+        return _scenario_from_record(record)
+    except ValidationError as error:
+        raise ScenarioError(f"{source}: its scenario is not valid: {describe_errors(error)}") from None
+    except (TypeError, AttributeError, ValueError) as error:  # not even a mapping where one belongs
+        raise ScenarioError(f"{source}: its scenario is not valid: {error}") from None
+
+
+def _scenario_from_record(record: dict) -> Scenario:
     rig = dict(record.get("rig", {}))
     allowed = _PRESET_KEYS.get(rig.get("preset", "surround6"), set()) | {"preset"}
     traffic = dict(record.get("traffic", {}))

@@ -251,22 +251,37 @@ def test_a_symbolic_link_as_an_output_folder_is_refused_and_nothing_moves(tmp_pa
 def test_a_rehashed_manifest_that_lies_is_refused_in_one_line(key, value, said, small_dataset, tmp_path, capsys):
     """Anyone can edit a manifest and compute its hash again: what it states is checked against its tables and
     limits (10¹² frames tried to allocate 7.28 TiB)."""
+    copy = _rehashed(small_dataset, tmp_path, lambda manifest: manifest.__setitem__(key, value))
+    err = _error(capsys, ["info", str(copy)])
+    assert said in err
+
+
+def _rehashed(dataset, tmp_path, edit):
+    """A copy of ``dataset`` whose manifest ``edit`` changed, its hash computed again (as anyone can)."""
     import json
     import shutil
 
     from simrig.dataset.manifest import manifest_digest
 
-    copy = shutil.copytree(small_dataset.path, tmp_path / "ds")
+    copy = shutil.copytree(dataset.path, tmp_path / "ds")
     manifest = json.loads((copy / "manifest.json").read_text())
     assert manifest["frames"] == 30
-    manifest[key] = value
+    edit(manifest)
     manifest.pop("manifest_sha256")
     manifest.pop("complete")
     manifest["manifest_sha256"] = manifest_digest(manifest)
     manifest["complete"] = True
     (copy / "manifest.json").write_text(json.dumps(manifest))
-    err = _error(capsys, ["info", str(copy)])
-    assert said in err
+    return copy
+
+
+def test_an_invalid_scenario_in_a_rehashed_manifest_is_one_line_naming_the_dataset_and_setting(
+        small_dataset, saga_tracks, tmp_path, capsys):
+    """``traffic.vehicles = "many"`` in a manifest's scenario printed a raw pydantic traceback where the scorer's
+    planner rebuilds the scenario."""
+    copy = _rehashed(small_dataset, tmp_path, lambda manifest: manifest["scenario"]["traffic"].update(vehicles="many"))
+    err = _error(capsys, ["score", str(copy), str(saga_tracks)])
+    assert f"dataset {copy}: its scenario is not valid" in err and "traffic.vehicles" in err
 
 
 def test_measure_json_is_strict_json_and_a_one_degree_camera_is_the_narrowest(small_dataset, tmp_path, capsys):

@@ -101,7 +101,7 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     if not (run_dir / SCORES_DIR / label / "errors.parquet").is_file():
         raise ExplainError(f"{run_dir / SCORES_DIR / label}: no errors.parquet (the run was not scored; run "
                            "'simrig run' again into this folder)")
-    scenario = scenario_from_record(dataset.scenario)
+    scenario = scenario_from_record(dataset.scenario, f"dataset {dataset.path}")
     known = all_groups(scenario)
     has_3d = (run_dir / TRACKS_DIR / label / "tracks3d.parquet").exists() and record["camera"] is None
     present = present_groups(scenario, len(dataset.rig.cameras), scored_in_3d=has_3d)

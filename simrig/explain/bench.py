@@ -92,7 +92,7 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
     tasks: list[CoalitionTask] = []
     for (scenario_name, seed, cell), cell_pairs in groupby(pairs, key=lambda pair: pair[:3]):
         dataset = Dataset.open(Path(description["cache"]) / cell)
-        scenario = scenario_from_record(dataset.scenario)
+        scenario = scenario_from_record(dataset.scenario, f"dataset {dataset.path}")
         runs: dict[frozenset, list[TrackerRun]] = {}
         for *_, tracker, scored in cell_pairs:
             entry = entries[tracker]

@@ -90,7 +90,7 @@ def _counterfactual_dataset(source: Dataset, removed: tuple[str, ...], scratch: 
         return Dataset.open(out)
     except DatasetError:
         pass
-    scenario = scenario_from_record(source.scenario)
+    scenario = scenario_from_record(source.scenario, f"dataset {source.path}")
     generate(scenario, seed=source.seed, out=out, frames=source.frame_count, overwrite=out.exists(),
              world_from=source, removed=frozenset(removed))
     return Dataset.open(out)

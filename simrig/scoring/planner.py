@@ -162,7 +162,7 @@ def planner_road_of(dataset: Dataset) -> PlanningRoad | None:
     """The planning road of ``dataset``; None for a dataset simrig did not simulate (an imported one)."""
     if dataset.source is not None:
         return None
-    scenario = scenario_from_record(dataset.scenario)
+    scenario = scenario_from_record(dataset.scenario, f"dataset {dataset.path}")
     return PlanningRoad(scenario.traffic, scenario.frame_rate_hz, dataset.seed)
 
 
