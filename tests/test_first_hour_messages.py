@@ -275,6 +275,13 @@ def _rehashed(dataset, tmp_path, edit):
     return copy
 
 
+def test_a_rehashed_manifest_that_lies_about_a_tables_rows_is_refused_when_the_table_is_read(small_dataset, sort_tracks,
+                                                                                             tmp_path, capsys):
+    copy = _rehashed(small_dataset, tmp_path, lambda manifest: manifest["files"]["detections"].update(rows=7))
+    err = _error(capsys, ["track", str(copy), "--tracker", "sort", "--out", str(tmp_path / "t")])
+    assert f"dataset {str(copy)!r}: manifest says detections holds 7 rows, its table holds" in err
+
+
 def test_an_invalid_scenario_in_a_rehashed_manifest_is_one_line_naming_the_dataset_and_setting(
         small_dataset, saga_tracks, tmp_path, capsys):
     """``traffic.vehicles = "many"`` in a manifest's scenario printed a raw pydantic traceback where the scorer's

@@ -273,6 +273,10 @@ class Dataset:
         if not parquet.schema_arrow.equals(ALL_SCHEMAS[name], check_metadata=False):
             raise DatasetError(f"dataset {str(self.path)!r}: {name} columns {parquet.schema_arrow.names} do not "
                                "match its schema")
+        stated = self.manifest["files"][name].get("rows")
+        if stated is not None and stated != parquet.metadata.num_rows:  # a re-hashed manifest that lies
+            raise DatasetError(f"dataset {str(self.path)!r}: manifest says {name} holds {stated!r} rows, its table "
+                               f"holds {parquet.metadata.num_rows}")
         return parquet
 
     @cached_property
