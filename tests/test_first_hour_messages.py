@@ -304,3 +304,31 @@ def test_measure_json_is_strict_json_and_a_one_degree_camera_is_the_narrowest(sm
     json.loads((tmp_path / "m.json").read_text(), parse_constant=refuse)  # no NaN: empty bands are null
     with pytest.raises(ValueError, match=r"hfov_deg\s+Input should be greater than or equal to 1"):
         Scenario.model_validate({"name": "t", "rig": {"preset": "stereo", "hfov_deg": 1e-300}})
+
+
+def test_a_tracker_that_ignores_the_alarm_is_still_stopped_with_one_line(small_dataset, tmp_path):
+    """A tracker that sets SIGALRM to be ignored and then loops defeated --frame-time-limit: the command hung for
+    good. The watchdog ends the process a little after the limit, saying why."""
+    import time
+
+    (tmp_path / "stubborn.py").write_text(textwrap.dedent("""\
+        import signal
+
+        class Stubborn:
+            def reset(self, *, rig, seed=None):
+                pass
+
+            def step(self, frame):
+                signal.signal(signal.SIGALRM, signal.SIG_IGN)
+                while True:
+                    pass
+        """))
+    started = time.monotonic()
+    done = subprocess.run([sys.executable, "-m", "simrig", "track", str(small_dataset.path), "--tracker",
+                           "stubborn:Stubborn", "--out", str(tmp_path / "t"), "--frame-time-limit", "0.5"],
+                          cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(tmp_path)}, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 124 and time.monotonic() - started < 60
+    assert done.stderr.strip().splitlines()[-1].startswith("simrig: error: tracker 'stubborn:Stubborn': frame 0")
+    assert "could not be stopped (it ignores or replaced SIGALRM" in done.stderr
+    assert not (tmp_path / "t").exists()

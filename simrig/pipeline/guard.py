@@ -7,15 +7,19 @@ reported naming the tracker and the frame; what ``step()`` returns is checked be
 boxes, known cameras), so a bad value is an error naming tracker, frame, track and field — never a
 traceback from deep inside Arrow or a silently converted number.
 
-Limits: a call stuck inside C code that never returns to Python (a deadlocked extension) cannot be
-interrupted this way; outside the main thread no limit applies.
+A call the alarm cannot stop — stuck inside C code that never returns to Python, or a tracker that ignores or
+replaces ``SIGALRM`` — is ended by a watchdog thread a little later, with the whole process (one line on stderr);
+outside the main thread no limit applies.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import signal
+import sys
 import threading
+import time
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from numbers import Integral, Real
@@ -59,6 +63,7 @@ def time_limit(seconds: float | None, what: str) -> Iterator[None]:
         raise _Expired
 
     previous = signal.signal(signal.SIGALRM, expired)
+    _WATCHDOG.arm(seconds, what)
     try:
         signal.setitimer(signal.ITIMER_REAL, seconds)  # inside the try: a tiny limit may fire at once
         yield
@@ -66,8 +71,72 @@ def time_limit(seconds: float | None, what: str) -> Iterator[None]:
         raise TrackerTimeout(f"{what} did not return within {seconds:g} s (the per-frame time limit); "
                              "it was stopped") from None
     finally:
+        _WATCHDOG.disarm()
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
+
+
+WATCHDOG_GRACE_S = 2.0
+"""[s] the least time the watchdog gives a call past its limit to be stopped by the alarm (also half the limit)."""
+WATCHDOG_EXIT_CODE = 124
+"""Exit status of a process the watchdog ends (``timeout``'s)."""
+
+
+class _Watchdog:
+    """The second stop of :func:`time_limit`: a daemon thread that ends the process (one line on stderr, exit
+    status :data:`WATCHDOG_EXIT_CODE`) when a call is still running :data:`WATCHDOG_GRACE_S` (or half its limit)
+    after its limit — the alarm did not stop it, because the tracker ignores or replaced ``SIGALRM``, cancelled
+    the timer, or is stuck in C code. Nothing else can stop a call in this process; an interactive command would
+    otherwise hang for good, and a bench worker's death is reported by the bench."""
+
+    def __init__(self):
+        self._condition = threading.Condition()
+        self._deadline: float | None = None
+        self._what = ""
+        self._thread: threading.Thread | None = None
+
+    def arm(self, seconds: float, what: str) -> None:
+        with self._condition:
+            self._deadline = time.monotonic() + seconds + max(WATCHDOG_GRACE_S, seconds / 2)
+            self._what, self._limit = what, seconds
+            if self._thread is None or not self._thread.is_alive():  # one per process (a fork has none)
+                self._thread = threading.Thread(target=self._watch, name="simrig-watchdog", daemon=True)
+                self._thread.start()
+            self._condition.notify()
+
+    def disarm(self) -> None:
+        with self._condition:
+            self._deadline = None
+            self._condition.notify()
+
+    def _watch(self) -> None:
+        with self._condition:
+            while True:
+                if self._deadline is None:
+                    self._condition.wait()
+                    continue
+                left = self._deadline - time.monotonic()
+                if left > 0:
+                    self._condition.wait(left)
+                    continue
+                sys.stderr.write(f"simrig: error: {self._what} did not return within {self._limit:g} s and could "
+                                 "not be stopped (it ignores or replaced SIGALRM, cancelled the timer, or is stuck "
+                                 "in C code): the process ends here\n")
+                sys.stderr.flush()
+                _exit_now(WATCHDOG_EXIT_CODE)
+
+
+_WATCHDOG = _Watchdog()
+
+
+def _exit_now(code: int) -> None:
+    """End the process at once: the C ``_exit`` itself (``posix._exit``), since ``os._exit`` is replaced while a
+    tracker runs (:mod:`simrig.pipeline.track` refuses a tracker's own call)."""
+    try:
+        import posix
+    except ImportError:  # pragma: no cover - not a POSIX system: no alarm, no watchdog either
+        os._exit(code)
+    posix._exit(code)
 
 
 def _finite_box(box, kind: type, where: str, field: str) -> None:

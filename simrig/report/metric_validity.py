@@ -90,7 +90,8 @@ def oriented_values(results: pd.DataFrame) -> pd.DataFrame:
     """One row per (scenario, configuration, seed): every metric and outcome, oriented so higher is better, the
     least TTC capped at :data:`TTC_CAP_S`. ``configuration`` is ``tracker`` plus the detector setting."""
     frame = results.copy()
-    setting = np.where(frame["sweep"] == "", "", " @ " + frame["sweep"] + "=" + frame["value"].map("{:g}".format))
+    value = frame["value"].map(lambda v: "" if pd.isna(v) else f"{v:g}")
+    setting = np.where(frame["sweep"] == "", "", " @ " + frame["sweep"] + "=" + value)
     frame["configuration"] = frame["tracker"] + setting
     frame["drive_min_ttc_s"] = frame["drive_min_ttc_s"].clip(upper=TTC_CAP_S)
     for _, column, sign in (*METRICS, *OUTCOMES):
