@@ -50,6 +50,8 @@ EXPLAINABLE_3D = (*METRICS_3D, *PLANNER_METRICS)
 """The 3D metrics a run can be explained on: the nuScenes family and the planner-aware scores."""
 
 CACHE_DIR = "cache"
+THRESHOLDED_COUNTS = ("TP", "FP", "FN")
+"""3D counts taken at the run's best-MOTA score threshold (:mod:`simrig.scoring.amota`): said beside the table."""
 EXPLAIN_FILE = "explain.json"
 """The explain folder's document, written last: a folder without it did not finish."""
 EXACT_LIMIT = 7
@@ -438,6 +440,11 @@ def explain_table(document: dict) -> str:
         lines.append(cause.ljust(width) + "".join(cells))
     lines.append("residual".ljust(width) + "".join(
         (f"{metrics[n]['residual']:.1e}" if metrics[n]["residual"] is not None else "-").rjust(cell) for n in names))
+    thresholded = [n for n in names if n.removeprefix("3d:") in THRESHOLDED_COUNTS]
+    if thresholded:
+        lines.append(f"{', '.join(thresholded)}: counted at each run's own score threshold (the one that maximises "
+                     "its MOTA, as nuScenes does), so a share also holds that operating point moving, not only "
+                     "errors added or removed")
     if document["null_causes"]:
         lines.append("not an imperfection here (share 0 exactly): " + ", ".join(document["null_causes"]))
     if document["kept_on"]:
