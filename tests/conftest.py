@@ -40,3 +40,37 @@ def saga_tracks(small_dataset, tmp_path_factory):
     from simrig.pipeline.track import run_tracker
 
     return run_tracker(small_dataset, "saga", tmp_path_factory.mktemp("saga") / "saga").out
+
+
+PINNED = ("numpy", "scipy", "pandas", "pyarrow", "highway-env", "gymnasium", "shapely", "filterpy", "pyrender",
+          "trackeval", "motmetrics")
+"""Packages whose version moves documented numbers: the header says when one differs from constraints.txt."""
+
+
+def constraint_versions(path) -> dict[str, str]:
+    """``name → version`` of every ``name==version`` line of a constraints file (names lower-cased, ``_`` as ``-``)."""
+    pins = {}
+    for line in path.read_text(encoding="utf-8").splitlines():
+        name, equals, version = line.split("#")[0].strip().partition("==")
+        if equals:
+            pins[name.strip().lower().replace("_", "-")] = version.strip()
+    return pins
+
+
+def pytest_report_header(config):
+    """One line when the packages under test are not the versions simrig was last tested with."""
+    from importlib import metadata
+    from pathlib import Path
+
+    pins = constraint_versions(Path(__file__).resolve().parents[1] / "constraints.txt")
+    differ = []
+    for name in PINNED:
+        try:
+            installed = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+        if name in pins and pins[name] != installed:
+            differ.append(f"{name} {installed} (tested {pins[name]})")
+    if not differ:
+        return []
+    return ["simrig: not the versions in constraints.txt, so documented numbers may move: " + ", ".join(differ)]

@@ -76,3 +76,17 @@ def test_the_wheel_and_sdist_pass_twine_check_under_the_distribution_name(tmp_pa
         entry_points = archive.read(next(n for n in archive.namelist() if n.endswith("entry_points.txt"))).decode()
     assert "\nName: simrig-mot\n" in metadata and "Provides-Extra: testing" in metadata
     assert "simrig = simrig.cli:console" in entry_points
+
+
+def test_the_tested_versions_are_recorded_and_the_readme_and_ci_install_them():
+    """constraints.txt pins what the documented numbers were made with; the README's two commands and CI install
+    with it, and it pins every package whose release can move those numbers."""
+    from conftest import PINNED, constraint_versions
+
+    root = Path(__file__).resolve().parents[1]
+    pins = constraint_versions(root / "constraints.txt")
+    assert set(PINNED) <= set(pins), sorted(set(PINNED) - set(pins))
+    readme = (root / "README.md").read_text(encoding="utf-8")
+    assert "pip install -e . -c constraints.txt && simrig run" in readme
+    assert "pip install -e '.[dev]' -c constraints.txt && pytest" in readme
+    assert "-e '.[dev]' -c constraints.txt" in (root / ".ci" / "run").read_text(encoding="utf-8")
