@@ -22,7 +22,12 @@ def parse_lines(file: Path, separator: str | None, minimum: int, names: tuple[st
     for number, line in enumerate(text.splitlines(), start=1):
         if not line.strip():
             continue
-        fields = [f.strip() for f in line.split(separator)] if separator else line.split()
+        if not separator:
+            fields = line.split()
+        elif " " in line or "\t" in line or "\r" in line:
+            fields = [f.strip() for f in line.split(separator)]
+        else:  # nothing to strip (most files): skip a call per field
+            fields = line.split(separator)
         if expected is None:
             expected = len(fields)
             if expected < minimum:
@@ -53,3 +58,21 @@ def integer(file: Path, line: int, fields: list[str], column: int, names: tuple[
         raise TracksError(f"{file}:{line}: column {column + 1} ({names[column]}) is {fields[column]!r}, "
                           "not an integer")
     return int(value)
+
+
+def numbers(file: Path, lines: list[tuple[int, list[str]]], columns: tuple[int, ...], names: tuple[str, ...],
+            integers: tuple[int, ...] = ()) -> np.ndarray:
+    """Fields ``columns`` of every line as an ``(N, len(columns))`` float array, all finite, those in ``integers``
+    integral: converted at once, and only when some field is not a finite number field by field again
+    (:func:`number`, :func:`integer`) to name the first bad one's file, line and column."""
+    if not lines:
+        return np.zeros((0, len(columns)))
+    try:
+        values = np.array([[fields[c] for c in columns] for _, fields in lines], dtype=float)
+    except ValueError:  # a field numpy does not read (text, or a form only Python's float takes)
+        values = None
+    whole = [columns.index(c) for c in integers]
+    if values is not None and np.isfinite(values).all() and (values[:, whole] == np.round(values[:, whole])).all():
+        return values
+    return np.array([[integer(file, line, fields, c, names) if c in integers else number(file, line, fields, c, names)
+                      for c in columns] for line, fields in lines], dtype=float)

@@ -55,7 +55,7 @@ from simrig.formats.imported_truth import (
     uncalibrated_camera,
 )
 from simrig.formats.motchallenge.tracks import ANY
-from simrig.formats.text_rows import integer, number, parse_lines
+from simrig.formats.text_rows import numbers, parse_lines
 from simrig.reading import read_capped
 from simrig.types import ActorClass, Rig
 
@@ -137,18 +137,22 @@ def _read_sequence(folder: Path, distractors: tuple[int, ...]) -> dict:
     ground truth, :data:`DISTRACTOR`, :data:`UNEVALUATED`) and why."""
     file = folder / "gt" / "gt.txt"
     rows = []
-    for line, fields in parse_lines(file, ",", 7, COLUMNS):
-        frame = integer(file, line, fields, 0, COLUMNS) - 1
+    lines = parse_lines(file, ",", 7, COLUMNS)
+    has_kind = bool(lines) and len(lines[0][1]) >= 8
+    columns, integers = ((*range(8),), (0, 1, 7)) if has_kind else ((*range(7),), (0, 1))
+    values = numbers(file, lines, columns, COLUMNS, integers=integers)
+    for (line, fields), row in zip(lines, values.tolist(), strict=True):
+        frame = int(row[0]) - 1
         if not 0 <= frame < MAX_IMPORTED_FRAMES:
             raise SourceError(f"{file}:{line}: frame {frame + 1} is outside 1 … {MAX_IMPORTED_FRAMES:,} (MOTChallenge "
                               "frames start at 1)")
-        ident = integer(file, line, fields, 1, COLUMNS)
+        ident = int(row[1])
         if not 0 <= ident < ID_STRIDE:
             raise SourceError(f"{file}:{line}: id {ident} outside 0…{ID_STRIDE - 1}")
-        left, top, width, height, consider = (number(file, line, fields, k, COLUMNS) for k in range(2, 7))
+        left, top, width, height, consider = row[2:7]
         if width <= 0 or height <= 0:
             raise SourceError(f"{file}:{line}: box width {fields[4]} and height {fields[5]} must be positive")
-        kind = integer(file, line, fields, 7, COLUMNS) if len(fields) >= 8 else PEDESTRIAN_CLASS
+        kind = int(row[7]) if has_kind else PEDESTRIAN_CLASS
         name = f"class {kind} ({CLASS_NAMES.get(kind, 'unknown')})"
         if kind in distractors:
             mark, reason = DISTRACTOR, name

@@ -20,11 +20,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pyarrow as pa
 
 from simrig.dataset.tracks_file import CLASSES, TRACKS2D_FILE, TRACKS2D_SCHEMA, rows_table
 from simrig.errors import TracksError
-from simrig.formats.text_rows import integer, number, parse_lines
+from simrig.formats.text_rows import numbers, parse_lines
 
 MIN_COLUMNS = 7
 COLUMN_NAMES = ("frame", "id", "left", "top", "width", "height", "conf")
@@ -73,15 +74,21 @@ def read_motchallenge(path: Path, *, frame_count: int, cameras: tuple[str, ...],
                 raise TracksError(f"{file}: MOTChallenge rows carry no class; name the file {camera}-CLASS.txt or "
                                   "score class-agnostically (--evaluation classes=any)")
             label = CLASSES[0]  # any label: a class-agnostic score does not read it
-        for line, fields in parse_lines(file, ",", MIN_COLUMNS, COLUMN_NAMES):
-            frame = integer(file, line, fields, 0, COLUMN_NAMES) - 1
-            if not 0 <= frame < frame_count:
-                raise TracksError(f"{file}:{line}: frame {frame + 1} is not in the dataset (frames 1…{frame_count} "
-                                  "in MOTChallenge's 1-based numbering)")
-            track = integer(file, line, fields, 1, COLUMN_NAMES)
-            left, top, width, height, conf = (number(file, line, fields, k, COLUMN_NAMES) for k in range(2, 7))
-            if width <= 0 or height <= 0:
-                raise TracksError(f"{file}:{line}: box width {fields[4]} and height {fields[5]} must be positive")
-            rows.append((frame, camera, track, label, conf, left, top, left + width, top + height))
+        lines = parse_lines(file, ",", MIN_COLUMNS, COLUMN_NAMES)
+        values = numbers(file, lines, tuple(range(7)), COLUMN_NAMES, integers=(0, 1))
+        frame, track, left, top, width, height, conf = values.T
+        frame = frame.astype(np.int64) - 1
+        outside = np.flatnonzero((frame < 0) | (frame >= frame_count))
+        if len(outside):
+            line = lines[outside[0]][0]
+            raise TracksError(f"{file}:{line}: frame {frame[outside[0]] + 1} is not in the dataset (frames "
+                              f"1…{frame_count} in MOTChallenge's 1-based numbering)")
+        empty = np.flatnonzero((width <= 0) | (height <= 0))
+        if len(empty):
+            line, fields = lines[empty[0]]
+            raise TracksError(f"{file}:{line}: box width {fields[4]} and height {fields[5]} must be positive")
+        rows += zip(frame.tolist(), [camera] * len(lines), track.astype(np.int64).tolist(), [label] * len(lines),
+                    conf.tolist(), left.tolist(), top.tolist(), (left + width).tolist(), (top + height).tolist(),
+                    strict=True)
     return {TRACKS2D_FILE: rows_table(rows, TRACKS2D_SCHEMA)}
 
