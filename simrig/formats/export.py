@@ -14,6 +14,7 @@ import shutil
 from pathlib import Path
 
 from simrig.dataset import Dataset
+from simrig.dataset.ground_truth import relative_to_true_ego
 from simrig.dataset.manifest import write_json_atomic
 from simrig.dataset.outputs import (
     PARTIAL_MARKER,
@@ -71,6 +72,8 @@ def export(dataset: Dataset | Path | str, fmt: str, out: Path | str, *, tracks: 
     if tracks is not None:
         track_set: TrackSet = read_tracks(tracks, frame_count=len(truth.frames), cameras=truth.rig.camera_names)
         rows3d = track_set.tracks3d
+        if rows3d is not None:  # with an ego-pose error: from the pose the tracker was given to the true one, as
+            rows3d = relative_to_true_ego(truth, rows3d)  # simrig score does, so a peer scores what it scores
         if track_set.tracks2d is not None and len(track_set.tracks2d):
             rows2d = track_set.tracks2d
         elif rows3d is not None:
