@@ -185,3 +185,27 @@ def test_dense_traffic_does_not_crash_and_keeps_moving():
     speeds = [np.hypot(s.boxes[:, 7], s.boxes[:, 8]).mean() for s in states]
     assert min(speeds) > 10.0  # IDM's equilibrium speed for this density is ~13 m/s; nothing stands still
     world.close()
+
+
+@pytest.mark.parametrize("name", ["highway_surround6", "roundabout_surround6", "merge_surround6"])
+def test_memoised_lane_coordinates_leave_every_table_as_highway_envs_own_give_them(name, tmp_path, monkeypatch):
+    """Lane coordinates are memoised per position within a step (:mod:`simrig.world.lane_memo`): a dataset made
+    with the memo has the same bytes as one made with highway-env's own method on every call."""
+    import json
+
+    from simrig.scenarios import load_scenario
+    from simrig.scenarios.overrides import with_setting
+
+    import simrig.world.traffic as traffic
+    from simrig.pipeline.generate import generate
+
+    scenario = with_setting(load_scenario(name), "render.visibility", False)
+    generate(scenario, seed=2, out=tmp_path / "memo", frames=40)
+    monkeypatch.setattr(traffic, "memoise_lanes", lambda network: [])
+    generate(scenario, seed=2, out=tmp_path / "plain", frames=40)
+
+    def hashes(folder):
+        return {name: entry["sha256"] for name, entry in json.loads((folder / "manifest.json").read_text())[
+            "files"].items()}
+
+    assert hashes(tmp_path / "memo") == hashes(tmp_path / "plain")

@@ -50,6 +50,7 @@ from ..road import RoadMarkings
 from ..types import EGO_ID, ActorClass, Collision, EgoPose, GroundTruthFrame
 from .collisions import CollisionWatch
 from .ego_planner import drive_on_perception
+from .lane_memo import forget, memoise_lanes
 from .layouts import LIMIT_MARGIN_MPS, build_layout, lane_samples
 from .markings import road_markings
 from .phantoms import phantoms_from_boxes
@@ -148,6 +149,7 @@ class TrafficWorld:
         road.vehicles = [self.ego]
         env.controlled_vehicles = [self.ego]
         self._watch = CollisionWatch(self.ego)
+        self._lane_memos = memoise_lanes(road.network)
         self._watch_steps(road)
         if self._ego_on_perception:
             drive_on_perception(self.ego)
@@ -254,6 +256,7 @@ class TrafficWorld:
         def watched_step(dt: float) -> None:
             watch.before_step(road)
             step(dt)
+            forget(self._lane_memos)  # every vehicle moved
             for collision in watch.after_step(road):
                 if collision.geometry and EGO_ID in (collision.first, collision.second):
                     self._freeze_with_ego(road, collision)
