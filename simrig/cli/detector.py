@@ -21,8 +21,8 @@ def _cmd_measure(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
     from ..dataset.outputs import write_text_atomic
-    from .measure import measure, pooled_reid
-    from .reid import format_table
+    from ..detector.measure import measure, pooled_reid
+    from ..detector.reid import format_table
 
     if args.json is not None:  # checked before any work, as every command's outputs are
         _file_output(args.json, "--json", args.dataset)
@@ -62,7 +62,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     files = [path for path in (args.embeddings, args.detections, args.truth) if path is not None and path.is_file()]
     _file_output(args.out, "--out", files)
     if args.embeddings is not None:
-        from .fit_appearance import fit_embeddings_to_toml
+        from ..detector.fit_appearance import fit_embeddings_to_toml
 
         for name in ("detections", "truth", "cameras"):
             if getattr(args, name) is not None:
@@ -75,13 +75,13 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     for name, default in (("frame_rate_hz", 10.0), ("lookalike_weight", 0.3), ("colours", 8)):
         if getattr(args, name) != default:
             raise SimrigError(f"--{name.replace('_', '-')}: only with --embeddings")
-    from .fit import fit_to_toml
+    from ..detector.fit import fit_to_toml
 
     print(fit_to_toml(args.detections, args.truth, args.out, args.cameras))
     return 0
 
 
-def add_detector_command(commands) -> None:
+def register_detector(commands) -> None:
     """Add ``detector measure`` and ``detector fit`` to the CLI's subcommands."""
     detector = commands.add_parser("detector", help="measure a dataset's detector errors or fit a detector model")
     actions = detector.add_subparsers(dest="detector_command", required=True, metavar="ACTION")
