@@ -53,6 +53,6 @@ CAUSE_BITS = np.array([int(cause) for cause in Cause], dtype=np.int64)
 
 
 def cause_masks(names: list[list[str]]) -> np.ndarray:
-    """Inverse of :func:`simrig.dataset.tables.cause_lists`: ``(R,)`` bit masks from lists of cause names."""
+    """Inverse of :func:`simrig.pipeline.frame_columns.cause_lists`: ``(R,)`` bit masks from lists of cause names."""
     lookup = {name: int(bit) for name, bit in zip(CAUSE_NAMES, CAUSE_BITS, strict=True)}
     return np.array([sum(lookup[name] for name in row) for row in names], dtype=np.int64)

@@ -10,6 +10,7 @@ annotator would draw around the visible part of the object inside the image.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -303,3 +304,20 @@ def viewing_bearings(boxes3d: np.ndarray, camera_centre: np.ndarray) -> np.ndarr
     """
     ray = boxes3d[:, :2] - camera_centre[..., :2]
     return np.pi - (np.pi - (np.arctan2(ray[:, 1], ray[:, 0]) - boxes3d[:, 6])) % (2 * np.pi)
+
+
+def as_estimated(boxes: np.ndarray, true: EgoPose, estimate: EgoPose) -> np.ndarray:
+    """World-frame boxes ``(..., 9)`` as a stack that localises with ``estimate`` instead of ``true`` reports
+    them: measured relative to the ego, put back into the world with the estimated pose (positions rotated
+    about the ego and moved with it, yaw and velocity rotated)."""
+    turn = estimate.yaw - true.yaw
+    c, s = math.cos(turn), math.sin(turn)
+    out = np.array(boxes, dtype=float, copy=True)
+    dx, dy = out[..., 0] - true.x, out[..., 1] - true.y
+    out[..., 0] = estimate.x + c * dx - s * dy
+    out[..., 1] = estimate.y + s * dx + c * dy
+    out[..., 6] = (out[..., 6] + turn + np.pi) % (2 * np.pi) - np.pi
+    vx, vy = out[..., 7].copy(), out[..., 8]
+    out[..., 7] = c * vx - s * vy
+    out[..., 8] = s * vx + c * vy
+    return out

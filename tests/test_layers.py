@@ -37,8 +37,8 @@ ALLOWED: dict[str, set[str]] = {
     "geometry": {"records", "scenarios", "geometry"},  # a rig is built from its validated settings
     "trackers": {"records", "geometry", "trackers"},  # never the world, renderer, sensor, dataset or scorer
     "making data": {*BELOW_DATA, "making data"},
-    "storage": {*BELOW_DATA, "making data", "storage"},
-    "formats": {*BELOW_DATA, "making data", "storage", "formats"},  # outside formats over simrig's own storage
+    "storage": {*BELOW_DATA, "storage"},  # tables and records only: what made them is the pipeline's business
+    "formats": {*BELOW_DATA, "storage", "formats"},  # outside formats over simrig's own storage
     "judging": {*BELOW_DATA, "making data", "storage", "formats", "judging"},  # never a tracker: each is a black box
     "pipeline": set(LAYERS) - {"orchestration", "faces"},
     "orchestration": set(LAYERS) - {"faces"},

@@ -19,8 +19,7 @@ import pyarrow.compute as pc
 
 from ..causes import CAUSE_BITS, CAUSE_NAMES, Cause
 from ..errors import DatasetError
-from ..geometry import project_boxes_at
-from ..sensor.capture import as_estimated
+from ..geometry import as_estimated, project_boxes_at
 from ..types import BOX2D_FIELDS, BOX3D_FIELDS, EGO_ID, Collision, EgoPose, Rig
 from .arrow_columns import shared_strings, string_codes
 from .tables import SCHEMAS

@@ -130,7 +130,7 @@ class DatasetWriter:
 
     # ------------------------------------------------------------------ content
     def write_frame(self, columns: dict[str, dict[str, np.ndarray]]) -> None:
-        """Buffer one frame's columns per table (see :func:`simrig.dataset.tables.frame_columns`)."""
+        """Buffer one frame's columns per table (see :func:`simrig.pipeline.frame_columns.frame_columns`)."""
         for name, table_columns in columns.items():
             self._buffers[name].append(table_columns)
         self._buffered_frames += 1

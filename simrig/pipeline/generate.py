@@ -16,11 +16,11 @@ from tqdm import tqdm
 
 from simrig.dataset import Dataset, DatasetWriter, check_output_folder
 from simrig.dataset.manifest import IMAGES_FOLDER, package_versions
-from simrig.dataset.tables import frame_columns
 from simrig.errors import DatasetError, TrafficCrashError
 from simrig.geometry import Projection, project_boxes
 from simrig.interrupts import stop_if_interrupted
 from simrig.pipeline.content_keys import drive_key, world_key
+from simrig.pipeline.frame_columns import frame_columns
 from simrig.pipeline.recorded_world import RecordedWorld
 from simrig.render.visibility import Visibility
 from simrig.rig import build_rig, rig_to_dict

@@ -29,6 +29,7 @@ import numpy as np
 from simrig.scenarios import ScenarioError
 from simrig.scenarios.timing_schema import EgoPoseConfig, timing_camera_names, timing_tables_set
 
+from ..geometry import as_estimated  # noqa: F401  (the sensor's name for it)
 from ..seeding import RandomStreams
 from ..types import EgoPose, Rig
 
@@ -186,18 +187,3 @@ class EgoPoseEstimate:
                        c * ego.vx - s * ego.vy, s * ego.vx + c * ego.vy)
 
 
-def as_estimated(boxes: np.ndarray, true: EgoPose, estimate: EgoPose) -> np.ndarray:
-    """World-frame boxes ``(..., 9)`` as a stack that localises with ``estimate`` instead of ``true`` reports
-    them: measured relative to the ego, put back into the world with the estimated pose (positions rotated
-    about the ego and moved with it, yaw and velocity rotated)."""
-    turn = estimate.yaw - true.yaw
-    c, s = math.cos(turn), math.sin(turn)
-    out = np.array(boxes, dtype=float, copy=True)
-    dx, dy = out[..., 0] - true.x, out[..., 1] - true.y
-    out[..., 0] = estimate.x + c * dx - s * dy
-    out[..., 1] = estimate.y + s * dx + c * dy
-    out[..., 6] = (out[..., 6] + turn + np.pi) % (2 * np.pi) - np.pi
-    vx, vy = out[..., 7].copy(), out[..., 8]
-    out[..., 7] = c * vx - s * vy
-    out[..., 8] = s * vx + c * vy
-    return out
