@@ -10,9 +10,11 @@ positive correlation is agreement. Over scenarios: the mean of the per-scenario 
 system-level agreement a benchmark's user relies on ("if my tracker scores higher, does it drive better?"), as
 NAVSIM (Dauner et al., NeurIPS 2024) compared its open-loop score with closed-loop results across planners.
 
-Intervals: 95 % percentile bootstrap over seeds — each replicate draws the seeds with replacement (one draw shared
-by every configuration and scenario, so configurations stay paired), recomputes the means and the correlations.
-A difference between two metrics is bootstrapped on the same replicates (paired).
+Intervals: 95 % BCa bootstrap over seeds (:func:`bca_interval`) — each replicate draws the seeds with replacement
+(one draw shared by every configuration and scenario, so configurations stay paired) and recomputes the means and
+the correlations; the jackknife (each seed left out once) gives the acceleration. Where the replicates lie almost
+wholly on one side of the estimate (:func:`lopsided`) the interval is the jackknife's instead
+(:func:`jackknife_interval`). A difference between two metrics is bootstrapped on the same replicates (paired).
 
 Both correlations are computed here, vectorised over the replicates (ranks by :func:`scipy.stats.rankdata`, τ-b as
 Σ sgn·sgn / √(Σ sgn² Σ sgn²) over pairs), rather than by :func:`scipy.stats.spearmanr` and
@@ -23,7 +25,7 @@ calls; the tests check both against scipy.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -65,24 +67,87 @@ class Correlations:
     spearman_boot: dict[tuple[str, str, str], np.ndarray]
     kendall_boot: dict[tuple[str, str, str], np.ndarray]
     means: dict[str, pd.DataFrame]
+    spearman_jack: dict[tuple[str, str, str], np.ndarray] = field(default_factory=dict)
+    kendall_jack: dict[tuple[str, str, str], np.ndarray] = field(default_factory=dict)
+    """Jackknife replicates (each seed left out once), for the intervals' acceleration."""
 
     def interval(self, kind: str, scenario: str, metric: str, outcome: str) -> tuple[float, float]:
-        """The 95 % percentile interval of ``kind`` (``spearman`` or ``kendall``)."""
-        boot = getattr(self, f"{kind}_boot")[(scenario, metric, outcome)]
-        return _percentiles(boot)
+        """The 95 % interval of ``kind`` (``spearman`` or ``kendall``): BCa, or the jackknife's where the
+        bootstrap is lopsided (:meth:`lopsided`)."""
+        key = (scenario, metric, outcome)
+        point, boot, jack = getattr(self, kind)[key], getattr(self, f"{kind}_boot")[key], getattr(
+            self, f"{kind}_jack").get(key)
+        if jack is not None and lopsided(point, boot):
+            return jackknife_interval(point, jack)
+        return bca_interval(point, boot, jack)
+
+    def lopsided(self, kind: str, scenario: str, metric: str, outcome: str) -> bool:
+        """Whether fewer than 10 % of the bootstrap replicates of ``kind`` lie on one side of the estimate."""
+        key = (scenario, metric, outcome)
+        return lopsided(getattr(self, kind)[key], getattr(self, f"{kind}_boot")[key])
 
     def difference(self, scenario: str, first: str, second: str, outcome: str) -> tuple[float, float, float]:
-        """Spearman ρ(first) − ρ(second) with outcome, and its paired 95 % interval."""
+        """Spearman ρ(first) − ρ(second) with outcome, and its paired 95 % interval (as :meth:`interval`)."""
         key_a, key_b = (scenario, first, outcome), (scenario, second, outcome)
         point = self.spearman[key_a] - self.spearman[key_b]
-        return (point, *_percentiles(self.spearman_boot[key_a] - self.spearman_boot[key_b]))
+        boot = self.spearman_boot[key_a] - self.spearman_boot[key_b]
+        jack = None
+        if key_a in self.spearman_jack and key_b in self.spearman_jack:
+            jack = self.spearman_jack[key_a] - self.spearman_jack[key_b]
+        if jack is not None and lopsided(point, boot):
+            return (point, *jackknife_interval(point, jack))
+        return (point, *bca_interval(point, boot, jack))
 
 
-def _percentiles(boot: np.ndarray) -> tuple[float, float]:
+def lopsided(point: float, boot: np.ndarray, tail: float = 0.1) -> bool:
+    """Whether fewer than ``tail`` of the finite bootstrap replicates lie on one side of ``point`` (BCa's bias
+    correction is then so large that its interval shrinks to a sliver at one end of the replicates). A correlation of
+    means over resampled seeds can sit almost wholly on one side of the estimate (a resample repeats seeds, so its
+    means average fewer of them): the bootstrap then says more about that than about the estimate's spread, and
+    the jackknife's interval is given instead (:meth:`Correlations.interval`)."""
     finite = boot[np.isfinite(boot)]
-    if not len(finite):
+    if not len(finite) or not np.isfinite(point):
+        return False
+    below = np.mean(finite < point)
+    return bool(below < tail or below > 1 - tail)
+
+
+def jackknife_interval(point: float, jack: np.ndarray, level: float = 0.95) -> tuple[float, float]:
+    """``point`` ± t(level, n − 1) × the jackknife standard error of the replicates ``jack`` (each seed left out
+    once): √((n − 1)/n · Σ (θ₍ᵢ₎ − θ̄)²)."""
+    from scipy.stats import t
+
+    finite = jack[np.isfinite(jack)]
+    if len(finite) < 3 or not np.isfinite(point):
         return (float("nan"), float("nan"))
-    low, high = np.percentile(finite, [2.5, 97.5])
+    n = len(finite)
+    error = float(np.sqrt((n - 1) / n * ((finite - finite.mean()) ** 2).sum()))
+    half = float(t.ppf((1 + level) / 2, n - 1)) * error
+    return point - half, point + half
+
+
+def bca_interval(point: float, boot: np.ndarray, jack: np.ndarray | None, level: float = 0.95) -> tuple[float, float]:
+    """The bias-corrected and accelerated bootstrap interval (Efron 1987) of a statistic with value ``point``,
+    bootstrap replicates ``boot`` and jackknife replicates ``jack`` (no acceleration without them). A correlation of
+    means over resampled seeds is pulled toward 0 (a resample repeats seeds, so its means are noisier): percentile
+    intervals then leave the estimate at their edge, which the bias correction undoes."""
+    from scipy.stats import norm
+
+    finite = boot[np.isfinite(boot)]
+    if not len(finite) or not np.isfinite(point):
+        return (float("nan"), float("nan"))
+    below = (np.sum(finite < point) + 0.5 * np.sum(finite == point)) / len(finite)
+    z0 = norm.ppf(np.clip(below, 0.5 / len(finite), 1 - 0.5 / len(finite)))
+    acceleration = 0.0
+    if jack is not None and np.isfinite(jack).sum() >= 3:
+        spread = np.nanmean(jack) - jack[np.isfinite(jack)]
+        denominator = 6.0 * (spread ** 2).sum() ** 1.5
+        acceleration = float((spread ** 3).sum() / denominator) if denominator > 0 else 0.0
+    quantiles = []
+    for alpha in ((1 - level) / 2, (1 + level) / 2):
+        z = z0 + norm.ppf(alpha)
+        quantiles.append(100 * norm.cdf(z0 + z / (1 - acceleration * z)))
+    low, high = np.percentile(finite, quantiles)
     return float(low), float(high)
 
 
@@ -112,6 +177,7 @@ def correlate(results: pd.DataFrame, *, replicates: int = REPLICATES, seed: int 
     scenarios = tuple(dict.fromkeys(values["scenario"]))
     names = [(m, mc) for m, mc, _ in METRICS] + [(o, oc) for o, oc, _ in OUTCOMES]
     spearman, kendall, spearman_boot, kendall_boot, means, counts = {}, {}, {}, {}, {}, {}
+    spearman_jack, kendall_jack = {}, {}
     for scenario in scenarios:
         rows = values[values["scenario"] == scenario]
         cube = {column: rows.pivot_table(index="configuration", columns="seed", values=column, dropna=False,
@@ -125,6 +191,7 @@ def correlate(results: pd.DataFrame, *, replicates: int = REPLICATES, seed: int 
         counts[scenario] = len(configurations)
         point = {column: np.nanmean(cube[column], axis=1) for _, column in names}  # (C,)
         boot = {column: np.nanmean(cube[column][:, draws], axis=2) for _, column in names}  # (C, B)
+        jack = {column: _left_out_means(cube[column]) for _, column in names}  # (C, S)
         means[scenario] = pd.DataFrame(point, index=configurations)
         for metric, metric_column in names[:len(METRICS)]:
             for outcome, outcome_column in names[len(METRICS):]:
@@ -134,15 +201,28 @@ def correlate(results: pd.DataFrame, *, replicates: int = REPLICATES, seed: int 
                 kendall[key] = float(kendall_tau_b(x, y)[0])
                 spearman_boot[key] = spearman_rho(boot[metric_column], boot[outcome_column])
                 kendall_boot[key] = kendall_tau_b(boot[metric_column], boot[outcome_column])
+                spearman_jack[key] = spearman_rho(jack[metric_column], jack[outcome_column])
+                kendall_jack[key] = kendall_tau_b(jack[metric_column], jack[outcome_column])
     for metric, _, _ in METRICS:
         for outcome, _, _ in OUTCOMES:
             key = ("all", metric, outcome)
-            for store in (spearman, kendall, spearman_boot, kendall_boot):
+            for store in (spearman, kendall, spearman_boot, kendall_boot, spearman_jack, kendall_jack):
                 with warnings.catch_warnings():  # a metric constant on every scenario: NaN, said in the tables
                     warnings.simplefilter("ignore", RuntimeWarning)
                     store[key] = np.nanmean([store[(s, metric, outcome)] for s in scenarios], axis=0)
             spearman[key], kendall[key] = float(spearman[key]), float(kendall[key])
-    return Correlations(scenarios, seeds, counts, spearman, kendall, spearman_boot, kendall_boot, means)
+    return Correlations(scenarios, seeds, counts, spearman, kendall, spearman_boot, kendall_boot, means,
+                        spearman_jack, kendall_jack)
+
+
+def _left_out_means(values: np.ndarray) -> np.ndarray:
+    """``(C, S)`` → ``(C, S)``: column j the mean of each row over every seed but seed j (NaN left out)."""
+    present = np.isfinite(values)
+    total, count = np.where(present, values, 0.0).sum(axis=1, keepdims=True), present.sum(axis=1, keepdims=True)
+    left_total = total - np.where(present, values, 0.0)
+    left_count = count - present
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(left_count > 0, left_total / np.maximum(left_count, 1), np.nan)
 
 
 def spearman_rho(x: np.ndarray, y: np.ndarray) -> np.ndarray:

@@ -30,8 +30,10 @@ def metric_validity_section(bench: BenchResults, out: Path) -> list[str]:
         f"least time to collision is capped at {TTC_CAP_S:g} s. Spearman's ρ and Kendall's τ-b over the "
         "configurations of each scenario, then the mean over scenarios; every metric and outcome is oriented so "
         "that higher is better (a positive correlation is agreement: e.g. PKL and collisions enter negated). "
-        f"Brackets: 95 % bootstrap intervals over seeds ({REPLICATES} replicates, the configurations paired); "
-        "`n.s.`: the interval contains 0. Method: `simrig.report.metric_validity`.", "",
+        f"Brackets: 95 % BCa bootstrap intervals over seeds ({REPLICATES} replicates, the configurations paired); "
+        "`†`: 90 % or more of the bootstrap replicates lay on one side of the estimate (a resample repeats seeds, so "
+        "its means average fewer of them), and the interval is the jackknife's (each seed left out once); `n.s.`: "
+        "the interval contains 0. Method: `simrig.report.metric_validity`.", "",
         "Spearman's ρ, mean over scenarios:", "", *_matrix(found, "spearman", "all"), "",
         "Kendall's τ-b, mean over scenarios:", "", *_matrix(found, "kendall", "all"), "",
         *_verdicts(found), "",
@@ -53,7 +55,8 @@ def _cell(found: Correlations, kind: str, scenario: str, metric: str, outcome: s
     point = getattr(found, kind)[(scenario, metric, outcome)]
     low, high = found.interval(kind, scenario, metric, outcome)
     flag = " n.s." if not low > 0 and not high < 0 else ""
-    return f"{point:+.2f} [{low:+.2f}, {high:+.2f}]{flag}"
+    mark = "†" if found.lopsided(kind, scenario, metric, outcome) else ""
+    return f"{point:+.2f} [{low:+.2f}, {high:+.2f}]{mark}{flag}"
 
 
 def _matrix(found: Correlations, kind: str, scenario: str) -> list[str]:
@@ -71,7 +74,7 @@ def _verdicts(found: Correlations) -> list[str]:
         text = f"- **{outcome}**: {best}, ρ {_cell(found, 'spearman', 'all', best, outcome)}"
         for other in dict.fromkeys((runner, "AMOTA")):
             if other != best:
-                point, low, high = found.difference("all", best, other, outcome)
+                point, low, high = found.difference("all", best, other, outcome)  # jackknife's where lopsided
                 flag = " n.s." if low <= 0 <= high else ""
                 text += f"; ahead of {other} by {point:+.2f} [{low:+.2f}, {high:+.2f}]{flag}"
         lines.append(text)
