@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from ..dataset.outputs import save_figure
 from ..markdown import table
 from .load import BenchResults
@@ -37,7 +39,8 @@ def metric_validity_section(bench: BenchResults, out: Path) -> list[str]:
         "Spearman's ρ, mean over scenarios:", "", *_matrix(found, "spearman", "all"), "",
         "Kendall's τ-b, mean over scenarios:", "", *_matrix(found, "kendall", "all"), "",
         *_verdicts(found), "",
-        "Spearman's ρ per scenario (point estimates; `*`: interval excludes 0):", "",
+        "Spearman's ρ per scenario (point estimates; `*`: interval excludes 0; `–`: the same value in every "
+        "configuration, e.g. no drive collided):", "",
         *_per_scenario(found), "",
     ]
     figure = _plot(found, out / FIGURE)
@@ -88,9 +91,13 @@ def _per_scenario(found: Correlations) -> list[str]:
         row = [metric]
         for scenario in found.scenarios:
             for outcome, _, _ in OUTCOMES:
+                point = found.spearman[(scenario, metric, outcome)]
+                if not np.isfinite(point):  # an outcome (or metric) the same in every configuration
+                    row.append("–")
+                    continue
                 low, high = found.interval("spearman", scenario, metric, outcome)
                 star = "*" if low > 0 or high < 0 else ""
-                row.append(f"{found.spearman[(scenario, metric, outcome)]:+.2f}{star}")
+                row.append(f"{point:+.2f}{star}")
         rows.append(row)
     return table(header, rows)
 
