@@ -7,6 +7,8 @@ silhouettes) → the sensor model → optional colour images → the tables.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Protocol
@@ -57,6 +59,15 @@ class StageTimes:
     images: float = 0.0
     writing: float = 0.0
     total: float = 0.0
+
+    @contextmanager
+    def stage(self, name: str) -> Iterator[None]:
+        """Add the seconds the block takes to stage ``name``."""
+        tick = time.perf_counter()
+        try:
+            yield
+        finally:
+            setattr(self, name, getattr(self, name) + time.perf_counter() - tick)
 
 
 @dataclass
@@ -135,9 +146,8 @@ def generate(
     started = time.perf_counter()
     world = (_SimulatedWorld(scenario, rig, streams, images, ego_on_perception=driver is not None)
              if world_from is None else RecordedWorld(world_from, rig))
-    tick = time.perf_counter()
-    plans = _TruthPlans(scenario, seed, world_from)
-    times.planning += time.perf_counter() - tick
+    with times.stage("planning"):
+        plans = _TruthPlans(scenario, seed, world_from)
     events: list[dict] = []
     try:
         with DatasetWriter(out, overwrite=overwrite) as writer:
@@ -150,54 +160,51 @@ def generate(
                 if frame == 0 and world.markings is not None:
                     writer.write_json("road.json", world.markings.to_dict())
 
-                tick = time.perf_counter()
-                output = sensor.observe(state, projection, visibility)
-                times.sensor += time.perf_counter() - tick
+                with times.stage("sensor"):
+                    output = sensor.observe(state, projection, visibility)
 
                 if images:
-                    tick = time.perf_counter()
-                    scene = world.scene
-                    scene.set_frame(state.ego, state.classes, state.boxes)
-                    for camera in rig.cameras:
-                        writer.write_image(
-                            f"{IMAGES_FOLDER}/{camera.name}/{frame:06d}.png", scene.colour(camera, rig, state.ego)
-                        )
-                    times.images += time.perf_counter() - tick
+                    with times.stage("images"):
+                        scene = world.scene
+                        scene.set_frame(state.ego, state.classes, state.boxes)
+                        for camera in rig.cameras:
+                            writer.write_image(
+                                f"{IMAGES_FOLDER}/{camera.name}/{frame:06d}.png", scene.colour(camera, rig, state.ego)
+                            )
 
-                tick = time.perf_counter()
-                columns = frame_columns(state, visibility, output, rig.camera_names)
-                times.writing += time.perf_counter() - tick
-                tick = time.perf_counter()
-                columns["truth_plans"] = plans.row(state)
-                times.planning += time.perf_counter() - tick
-                tick = time.perf_counter()
-                writer.write_frame(columns)
-                times.writing += time.perf_counter() - tick
+                with times.stage("writing"):
+                    columns = frame_columns(state, visibility, output, rig.camera_names)
+                with times.stage("planning"):
+                    columns["truth_plans"] = plans.row(state)
+                with times.stage("writing"):
+                    writer.write_frame(columns)
                 if driver is not None:
-                    tick = time.perf_counter()
-                    world.traffic.perceive(*driver.decide(state, columns))
-                    times.driving += time.perf_counter() - tick
-            tick = time.perf_counter()
-            manifest = writer.commit(
-                {
-                    "scenario": scenario.model_dump(mode="json"),
-                    "seed": seed,
-                    "frames": frames,
-                    "frame_rate_hz": scenario.frame_rate_hz,
-                    "visibility": "rendered" if scenario.render.visibility else "not measured",
-                    "versions": package_versions(),
-                    "events": events,
-                    "world_key": (world_key(scenario, seed, frames) if driver is None
-                                  else drive_key(scenario, seed, frames, driver.record)),
-                    **({"removed_causes": sorted(removed)} if removed else {}),
-                    **({"drive": driver.record} if driver is not None else {}),
-                }
-            )
-            times.writing += time.perf_counter() - tick
+                    with times.stage("driving"):
+                        world.traffic.perceive(*driver.decide(state, columns))
+            with times.stage("writing"):
+                manifest = writer.commit(_manifest_record(scenario, seed, frames, events, removed, driver))
     finally:
         world.close()
     times.total = time.perf_counter() - started
     return GenerateResult(path=out, manifest=manifest, times=times)
+
+
+def _manifest_record(scenario: Scenario, seed: int, frames: int, events: list[dict], removed, driver) -> dict:
+    """What the manifest says of a generation besides its files: the resolved scenario, seed, frames, versions, the
+    simulator's events, the world's key (a drive's: with who perceived), and the causes removed."""
+    return {
+        "scenario": scenario.model_dump(mode="json"),
+        "seed": seed,
+        "frames": frames,
+        "frame_rate_hz": scenario.frame_rate_hz,
+        "visibility": "rendered" if scenario.render.visibility else "not measured",
+        "versions": package_versions(),
+        "events": events,
+        "world_key": (world_key(scenario, seed, frames) if driver is None
+                      else drive_key(scenario, seed, frames, driver.record)),
+        **({"removed_causes": sorted(removed)} if removed else {}),
+        **({"drive": driver.record} if driver is not None else {}),
+    }
 
 
 def refuse_crashes(scenario: Scenario, seed: int, state: GroundTruthFrame) -> None:
@@ -249,28 +256,25 @@ class _SimulatedWorld:
         self.markings = self.scene = self.meter = None
 
     def frame(self, frame: int, times: StageTimes) -> tuple[GroundTruthFrame, Projection, Visibility]:
-        tick = time.perf_counter()
-        state = self.traffic.reset() if frame == 0 else self.traffic.step()
-        if frame == 0:
-            self.markings = self.traffic.road_markings()
-            if self.scenario.render.visibility or self.images:
-                from simrig.render.meter import VisibilityMeter
-                from simrig.render.scene import RigScene
+        with times.stage("traffic"):
+            state = self.traffic.reset() if frame == 0 else self.traffic.step()
+            if frame == 0:
+                self.markings = self.traffic.road_markings()
+                if self.scenario.render.visibility or self.images:
+                    from simrig.render.meter import VisibilityMeter
+                    from simrig.render.scene import RigScene
 
-                self.scene = RigScene(self.markings)
-                self.meter = VisibilityMeter(self.rig, self.scenario.render.visibility_scale, self.scene)
-        times.traffic += time.perf_counter() - tick
+                    self.scene = RigScene(self.markings)
+                    self.meter = VisibilityMeter(self.rig, self.scenario.render.visibility_scale, self.scene)
 
-        tick = time.perf_counter()
-        projection = project_boxes(state.boxes, self.rig, state.ego)
-        times.projection += time.perf_counter() - tick
+        with times.stage("projection"):
+            projection = project_boxes(state.boxes, self.rig, state.ego)
 
-        tick = time.perf_counter()
-        if self.scenario.render.visibility:
-            visibility = self.meter.measure(state, projection)
-        else:
-            visibility = Visibility.unmeasured(projection)
-        times.visibility += time.perf_counter() - tick
+        with times.stage("visibility"):
+            if self.scenario.render.visibility:
+                visibility = self.meter.measure(state, projection)
+            else:
+                visibility = Visibility.unmeasured(projection)
         return state, projection, visibility
 
     def close(self) -> None:
