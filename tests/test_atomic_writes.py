@@ -73,6 +73,7 @@ def test_a_writer_replaces_a_planted_link_and_never_writes_through_it(writer, tm
     assert victim.read_text() == "mine" and not target.is_symlink() and target.stat().st_size > 0
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_killed_mid_write_the_target_is_old_or_new_never_partial(tmp_path):
     """A process writing a 64 MiB file through atomic_file, killed with SIGKILL at several moments."""
     target = tmp_path / "big.bin"

@@ -44,6 +44,7 @@ def test_smoke_local_and_ray_write_identical_tables(smoke_local, tmp_path):
     assert pq.read_table(ray_run.results).num_rows == 38
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_results_have_one_row_per_point_and_tracker(smoke_local):
     rows = pq.read_table(smoke_local.results).to_pandas()
     # highway_surround6: 5 points × 2 seeds × (saga, global_hungarian); stereo_occluder: 3 × 2 × 3 trackers
@@ -69,6 +70,7 @@ def test_results_have_one_row_per_point_and_tracker(smoke_local):
         assert mine["count"].sum() == row[column]
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_a_row_equals_a_direct_run_of_its_cell(smoke_local, tmp_path):
     rows = pq.read_table(smoke_local.results).to_pandas()
     row = rows[(rows["scenario"] == "stereo_occluder") & (rows["sweep"] == "miss_probability")
@@ -87,6 +89,7 @@ def test_a_row_equals_a_direct_run_of_its_cell(smoke_local, tmp_path):
     assert row["param.miss_probability"] == 0.4
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_rerun_skips_every_finished_cell(smoke_local):
     before = (smoke_local.out / "results.parquet").read_bytes()
     again = run_bench("smoke", out=smoke_local.out, workers=2)
@@ -182,6 +185,7 @@ def test_cli_errors_are_one_line(tmp_path):
         write_report(tmp_path)
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_report_shows_the_tables(smoke_local, tmp_path):
     index = write_report(smoke_local.out, out=tmp_path / "report")
     text = index.read_text()
@@ -225,6 +229,7 @@ def test_a_second_bench_in_the_same_folder_stops_at_once(tmp_path):
     assert not (out / "fragments").exists()
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_a_2d_tracker_first_is_reported_under_a_2d_heading_with_its_real_switches(tmp_path):
     """A suite whose first tracker is `deepsort` with no camera, then `saga`: the bench labels deepsort
     `scored = 2d` with the 2D IDSW of a direct score, the report lists it under a 2D heading, chooses its
@@ -256,6 +261,7 @@ def test_a_2d_tracker_first_is_reported_under_a_2d_heading_with_its_real_switche
     assert "The cell where `deepsort`" in text
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_a_suite_without_base_points_reports_its_curves_and_no_empty_tables(smoke_local, tmp_path):
     import shutil
 

@@ -54,6 +54,7 @@ def _start(suite: Path, out: Path, workers: int) -> subprocess.Popen:
                             text=True, preexec_fn=ctrl_c_delivered)
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_sigkill_of_the_driver_leaves_no_simrig_process(tmp_path):
     process = _start(_suite(tmp_path / "suite"), tmp_path / "out", workers=2)
     deadline = time.monotonic() + 120

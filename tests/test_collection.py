@@ -64,6 +64,7 @@ def _files(folder: Path) -> dict[str, bytes]:
             if path.is_file() and path.name != ".lock"}
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_a_collection_is_the_same_bytes_with_one_worker_or_two_and_every_dataset_matches_its_index_row(tmp_path):
     space = _space(tmp_path)
     one = generate_collection(space, count=8, out=tmp_path / "one", seed=5, shard_size=3, workers=1)
@@ -91,6 +92,7 @@ def test_a_collection_is_the_same_bytes_with_one_worker_or_two_and_every_dataset
     assert description["complete"] is True and description["count"] == 8
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_a_rerun_keeps_every_finished_sequence_and_another_collection_in_the_folder_is_refused(tmp_path):
     space = _space(tmp_path)
     first = generate_collection(space, count=4, out=tmp_path / "c", seed=1, workers=1)

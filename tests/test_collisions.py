@@ -142,6 +142,7 @@ tracker = "global_hungarian"
 """
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 @pytest.mark.parametrize("crashes", ["refused", "allowed"])
 def test_a_bench_records_a_refused_crash_as_that_cells_failure_and_counts_allowed_ones(crashes, tmp_path):
     """intersection_surround6 seed 0: two other vehicles collide at frame 18 (seed 1: none in 20 frames)."""

@@ -115,6 +115,7 @@ def test_factory_check_accepts_classes_and_annotated_functions(tmp_path, monkeyp
     assert type(build_tracker("my_trackers:make", {"gate": 4.0})).__name__ == "Wrapped"
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_with_trust_file_a_real_module_attribute_tracker_runs(tmp_path, small_scenario, monkeypatch):
     import simrig
 

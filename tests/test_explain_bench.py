@@ -46,6 +46,7 @@ def bench(tmp_path_factory):
     return run
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_every_tracker_on_every_base_cell_has_shares_that_add_up(bench):
     rows = pq.read_table(bench.out / "explain.parquet").to_pandas()
     assert set(rows["tracker"]) == {"saga", "sort"}
@@ -60,6 +61,7 @@ def test_every_tracker_on_every_base_cell_has_shares_that_add_up(bench):
     assert rows[(rows["tracker"] == "saga") & (rows["metric"] == "HOTA")]["actual"].iloc[0] == pytest.approx(hota)
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_the_report_section_says_what_each_cause_costs_each_tracker(bench):
     section = "\n".join(cause_costs_section(bench.out, "tinyexplain"))
     rows = pq.read_table(bench.out / "explain.parquet").to_pandas()
@@ -100,6 +102,7 @@ def test_a_bench_without_explanation_says_how_to_get_one(tmp_path):
     assert "Not computed for this bench: `simrig bench tinyexplain --explain`" in section
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_a_cell_explained_with_the_other_trackers_equals_each_tracker_explained_alone(bench, tmp_path):
     # The bench runs each (cell, coalition) once for every tracker that needs it; the shares must be those of
     # explaining each tracker on its own (simrig explain's game).
@@ -133,6 +136,7 @@ def test_the_bench_report_has_the_section_and_keeps_its_table(bench, tmp_path):
     assert (tmp_path / "report" / "explain.parquet").is_file()  # the report folder can be made again
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_explaining_only_some_seeds(bench, tmp_path, capsys):
     import shutil
 
@@ -159,6 +163,7 @@ def test_explaining_an_unfinished_bench_is_one_line(tmp_path, capsys):
     assert capsys.readouterr().err.count("\n") == 1
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_a_tracker_that_times_out_in_the_bench_is_left_out_and_the_others_are_explained(tmp_path, monkeypatch,
                                                                                            capsys):
     # A hanging tracker: the bench records its timeout; --explain used to run it again on every
@@ -185,6 +190,7 @@ def test_a_tracker_that_times_out_in_the_bench_is_left_out_and_the_others_are_ex
     assert "- `bench_trackers:HangsOnFrame3` on cell `" in section and "### saga" in section
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_a_tracker_failing_on_one_counterfactual_is_left_out_of_the_bench_explanation(bench, tmp_path, monkeypatch):
     import shutil
 

@@ -9,9 +9,9 @@ import numpy as np
 import pandas as pd
 import pytest
 from scipy.stats import kendalltau, spearmanr
+from simrig.trackers.degraded import DegradedTracker
 
 from simrig.report.metric_validity import METRICS, OUTCOMES, TooFewCells, correlate, kendall_tau_b, spearman_rho
-from simrig.trackers.degraded import DegradedTracker
 from simrig.types import ActorClass, Box3D, Track
 
 
@@ -65,8 +65,8 @@ def test_the_bootstrap_is_the_same_twice_and_too_few_cells_are_refused():
     first, second = correlate(bench_rows(), replicates=200), correlate(bench_rows(), replicates=200)
     key = ("all", "IDF1", "collision")
     assert np.array_equal(first.spearman_boot[key], second.spearman_boot[key], equal_nan=True)
-    with pytest.raises(TooFewCells, match="at least 2"):
-        correlate(bench_rows(seeds=1))
+    with pytest.raises(TooFewCells, match="2 seeds: the intervals over seeds need at least 3"):
+        correlate(bench_rows(seeds=2))
     with pytest.raises(TooFewCells, match="scenario a: 3 configurations"):
         correlate(bench_rows(configurations=3))
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import tomllib
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES = {"simrig": "simrig", "simrig.trackers": "tracker", "simrig.scenarios": "scenarios"}
 
@@ -53,6 +55,7 @@ def test_version_names_the_distribution_to_install(capsys) -> None:
         assert tomllib.load(handle)["project"]["name"] == DISTRIBUTION == "simrig-mot"
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_the_wheel_and_sdist_pass_twine_check_under_the_distribution_name(tmp_path) -> None:
     """Built as a release would be (``python -m build``), both pass ``twine check``; the wheel's metadata names
     the distribution ``simrig-mot`` with the ``testing`` extra, and installs the ``simrig`` command."""

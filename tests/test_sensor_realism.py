@@ -104,6 +104,7 @@ def test_switching_one_cause_off_leaves_every_other_draw_bit_identical():
             np.testing.assert_array_equal(x.embeddings, y.embeddings)
 
 
+@pytest.mark.slow  # an end-to-end run: the default pass is kept near 5 minutes, CI's slow pass runs it
 def test_a_ghost_is_one_3d_box_seen_consistently_lives_its_life_and_scores_as_configured():
     config = {"birth_rate_hz": 20.0, "mean_life_s": 1.5, "shadow_fraction": 0.0, "range_m": [5.0, 40.0],
               "probability": 1.0, "score_mean": 0.6, "score_concentration": 12.0}

@@ -47,6 +47,8 @@ BOOTSTRAP_SEED = 20241
 """Seed of the bootstrap's draws (a fixed stream: the report is the same bytes from the same bench)."""
 MIN_CONFIGURATIONS = 4
 """A scenario needs at least this many configurations with values for its correlations to be computed."""
+MIN_SEEDS = 3
+"""The bench needs at least this many seeds: the intervals resample them (the jackknife leaves each out)."""
 
 
 class TooFewCells(ValueError):
@@ -168,11 +170,12 @@ def oriented_values(results: pd.DataFrame) -> pd.DataFrame:
 def correlate(results: pd.DataFrame, *, replicates: int = REPLICATES, seed: int = BOOTSTRAP_SEED) -> Correlations:
     """The rank correlations of every metric with every outcome (module docstring) of a closed-loop bench's
     ``results``; :class:`TooFewCells` when a scenario has fewer than :data:`MIN_CONFIGURATIONS` configurations or
-    the bench fewer than 2 seeds."""
+    the bench fewer than :data:`MIN_SEEDS` seeds."""
     values = oriented_values(results)
     seeds = tuple(sorted(values["seed"].unique()))
-    if len(seeds) < 2:
-        raise TooFewCells(f"{len(seeds)} seed: the bootstrap over seeds needs at least 2")
+    if len(seeds) < MIN_SEEDS:
+        raise TooFewCells(f"{len(seeds)} seed{'s' * (len(seeds) != 1)}: the intervals over seeds need at least "
+                          f"{MIN_SEEDS}")
     draws = np.random.default_rng(seed).integers(0, len(seeds), size=(replicates, len(seeds)))
     scenarios = tuple(dict.fromkeys(values["scenario"]))
     names = [(m, mc) for m, mc, _ in METRICS] + [(o, oc) for o, oc, _ in OUTCOMES]
@@ -189,8 +192,10 @@ def correlate(results: pd.DataFrame, *, replicates: int = REPLICATES, seed: int 
             raise TooFewCells(f"scenario {scenario}: {len(configurations)} configurations (trackers × detector "
                               f"settings); the correlations need at least {MIN_CONFIGURATIONS}")
         counts[scenario] = len(configurations)
-        point = {column: np.nanmean(cube[column], axis=1) for _, column in names}  # (C,)
-        boot = {column: np.nanmean(cube[column][:, draws], axis=2) for _, column in names}  # (C, B)
+        with warnings.catch_warnings():  # a configuration without a value in a resample: NaN, left out
+            warnings.simplefilter("ignore", RuntimeWarning)
+            point = {column: np.nanmean(cube[column], axis=1) for _, column in names}  # (C,)
+            boot = {column: np.nanmean(cube[column][:, draws], axis=2) for _, column in names}  # (C, B)
         jack = {column: _left_out_means(cube[column]) for _, column in names}  # (C, S)
         means[scenario] = pd.DataFrame(point, index=configurations)
         for metric, metric_column in names[:len(METRICS)]:

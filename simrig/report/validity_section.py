@@ -36,6 +36,8 @@ def metric_validity_section(bench: BenchResults, out: Path) -> list[str]:
         "`†`: 90 % or more of the bootstrap replicates lay on one side of the estimate (a resample repeats seeds, so "
         "its means average fewer of them), and the interval is the jackknife's (each seed left out once); `n.s.`: "
         "the interval contains 0. Method: `simrig.report.metric_validity`.", "",
+        "`–`: the metric or the outcome is the same in every configuration (e.g. no drive collided), so it orders "
+        "nothing.", "",
         "Spearman's ρ, mean over scenarios:", "", *_matrix(found, "spearman", "all"), "",
         "Kendall's τ-b, mean over scenarios:", "", *_matrix(found, "kendall", "all"), "",
         *_verdicts(found), "",
@@ -56,6 +58,8 @@ def _counts(found: Correlations) -> str:
 
 def _cell(found: Correlations, kind: str, scenario: str, metric: str, outcome: str) -> str:
     point = getattr(found, kind)[(scenario, metric, outcome)]
+    if not np.isfinite(point):  # the metric or the outcome the same in every configuration (no drive collided)
+        return "–"
     low, high = found.interval(kind, scenario, metric, outcome)
     flag = " n.s." if not low > 0 and not high < 0 else ""
     mark = "†" if found.lopsided(kind, scenario, metric, outcome) else ""
