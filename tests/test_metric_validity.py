@@ -65,8 +65,8 @@ def test_the_bootstrap_is_the_same_twice_and_too_few_cells_are_refused():
     first, second = correlate(bench_rows(), replicates=200), correlate(bench_rows(), replicates=200)
     key = ("all", "IDF1", "collision")
     assert np.array_equal(first.spearman_boot[key], second.spearman_boot[key], equal_nan=True)
-    with pytest.raises(TooFewCells, match="2 seeds: the intervals over seeds need at least 3"):
-        correlate(bench_rows(seeds=2))
+    with pytest.raises(TooFewCells, match="4 seeds: the intervals over seeds need at least 5"):
+        correlate(bench_rows(seeds=4))
     with pytest.raises(TooFewCells, match="scenario a: 3 configurations"):
         correlate(bench_rows(configurations=3))
 

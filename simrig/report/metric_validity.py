@@ -47,8 +47,9 @@ BOOTSTRAP_SEED = 20241
 """Seed of the bootstrap's draws (a fixed stream: the report is the same bytes from the same bench)."""
 MIN_CONFIGURATIONS = 4
 """A scenario needs at least this many configurations with values for its correlations to be computed."""
-MIN_SEEDS = 3
-"""The bench needs at least this many seeds: the intervals resample them (the jackknife leaves each out)."""
+MIN_SEEDS = 5
+"""The bench needs at least this many seeds: the intervals resample them (the jackknife leaves each out; with
+fewer, a correlation of means over 3 seeds has no interval worth printing)."""
 
 
 class TooFewCells(ValueError):
@@ -80,7 +81,9 @@ class Correlations:
         point, boot, jack = getattr(self, kind)[key], getattr(self, f"{kind}_boot")[key], getattr(
             self, f"{kind}_jack").get(key)
         if jack is not None and lopsided(point, boot):
-            return jackknife_interval(point, jack)
+            low, high = jackknife_interval(point, jack)
+            if np.isfinite(low):
+                return max(low, -1.0), min(high, 1.0)  # a correlation's range
         return bca_interval(point, boot, jack)
 
     def lopsided(self, kind: str, scenario: str, metric: str, outcome: str) -> bool:
@@ -97,7 +100,9 @@ class Correlations:
         if key_a in self.spearman_jack and key_b in self.spearman_jack:
             jack = self.spearman_jack[key_a] - self.spearman_jack[key_b]
         if jack is not None and lopsided(point, boot):
-            return (point, *jackknife_interval(point, jack))
+            low, high = jackknife_interval(point, jack)
+            if np.isfinite(low):
+                return point, max(low, -2.0), min(high, 2.0)  # a difference of two correlations' range
         return (point, *bca_interval(point, boot, jack))
 
 

@@ -10,7 +10,16 @@ import numpy as np
 from ..dataset.outputs import save_figure
 from ..markdown import table
 from .load import BenchResults
-from .metric_validity import METRICS, OUTCOMES, REPLICATES, TTC_CAP_S, Correlations, TooFewCells, correlate
+from .metric_validity import (
+    METRICS,
+    OUTCOMES,
+    REPLICATES,
+    TTC_CAP_S,
+    Correlations,
+    TooFewCells,
+    correlate,
+    jackknife_interval,
+)
 
 FIGURE = "metric-validity.png"
 """The figure's file name in the report folder."""
@@ -62,7 +71,9 @@ def _cell(found: Correlations, kind: str, scenario: str, metric: str, outcome: s
         return "–"
     low, high = found.interval(kind, scenario, metric, outcome)
     flag = " n.s." if not low > 0 and not high < 0 else ""
-    mark = "†" if found.lopsided(kind, scenario, metric, outcome) else ""
+    jack = getattr(found, f"{kind}_jack").get((scenario, metric, outcome))
+    mark = "†" if found.lopsided(kind, scenario, metric, outcome) and jack is not None and np.isfinite(
+        jackknife_interval(point, jack)[0]) else ""
     return f"{point:+.2f} [{low:+.2f}, {high:+.2f}]{mark}{flag}"
 
 
