@@ -45,8 +45,9 @@ REPLICATES = 2000
 """Bootstrap replicates."""
 BOOTSTRAP_SEED = 20241
 """Seed of the bootstrap's draws (a fixed stream: the report is the same bytes from the same bench)."""
-MIN_CONFIGURATIONS = 4
-"""A scenario needs at least this many configurations with values for its correlations to be computed."""
+MIN_CONFIGURATIONS = 6
+"""A scenario needs at least this many configurations with values for its correlations to be computed (over fewer,
+a rank correlation takes a handful of values and its intervals say little)."""
 MIN_SEEDS = 5
 """The bench needs at least this many seeds: the intervals resample them (the jackknife leaves each out; with
 fewer, a correlation of means over 3 seeds has no interval worth printing)."""
@@ -80,16 +81,19 @@ class Correlations:
         key = (scenario, metric, outcome)
         point, boot, jack = getattr(self, kind)[key], getattr(self, f"{kind}_boot")[key], getattr(
             self, f"{kind}_jack").get(key)
-        if jack is not None and lopsided(point, boot):
+        if self.uses_jackknife(kind, scenario, metric, outcome):
             low, high = jackknife_interval(point, jack)
-            if np.isfinite(low):
-                return max(low, -1.0), min(high, 1.0)  # a correlation's range
+            return max(low, -1.0), min(high, 1.0)  # a correlation's range
         return bca_interval(point, boot, jack)
 
-    def lopsided(self, kind: str, scenario: str, metric: str, outcome: str) -> bool:
-        """Whether fewer than 10 % of the bootstrap replicates of ``kind`` lie on one side of the estimate."""
+    def uses_jackknife(self, kind: str, scenario: str, metric: str, outcome: str) -> bool:
+        """Whether :meth:`interval` gives the jackknife's interval: fewer than 10 % of the bootstrap replicates lie
+        on one side of the estimate (:func:`lopsided`) and the jackknife has an interval of some width (with few
+        configurations every seed left out can give the same ranks: then BCa's stands)."""
         key = (scenario, metric, outcome)
-        return lopsided(getattr(self, kind)[key], getattr(self, f"{kind}_boot")[key])
+        jack = getattr(self, f"{kind}_jack").get(key)
+        return jack is not None and lopsided(getattr(self, kind)[key], getattr(self, f"{kind}_boot")[key]) and \
+            _usable(jackknife_interval(getattr(self, kind)[key], jack))
 
     def difference(self, scenario: str, first: str, second: str, outcome: str) -> tuple[float, float, float]:
         """Spearman ρ(first) − ρ(second) with outcome, and its paired 95 % interval (as :meth:`interval`)."""
@@ -99,11 +103,16 @@ class Correlations:
         jack = None
         if key_a in self.spearman_jack and key_b in self.spearman_jack:
             jack = self.spearman_jack[key_a] - self.spearman_jack[key_b]
-        if jack is not None and lopsided(point, boot):
+        if jack is not None and lopsided(point, boot) and _usable(jackknife_interval(point, jack)):
             low, high = jackknife_interval(point, jack)
-            if np.isfinite(low):
-                return point, max(low, -2.0), min(high, 2.0)  # a difference of two correlations' range
+            return point, max(low, -2.0), min(high, 2.0)  # a difference of two correlations' range
         return (point, *bca_interval(point, boot, jack))
+
+
+def _usable(interval: tuple[float, float]) -> bool:
+    """A finite interval at least 0.01 wide (the precision the report prints)."""
+    low, high = interval
+    return bool(np.isfinite(low) and np.isfinite(high) and high - low >= 0.01)
 
 
 def lopsided(point: float, boot: np.ndarray, tail: float = 0.1) -> bool:

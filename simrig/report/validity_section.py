@@ -18,7 +18,6 @@ from .metric_validity import (
     Correlations,
     TooFewCells,
     correlate,
-    jackknife_interval,
 )
 
 FIGURE = "metric-validity.png"
@@ -71,9 +70,7 @@ def _cell(found: Correlations, kind: str, scenario: str, metric: str, outcome: s
         return "–"
     low, high = found.interval(kind, scenario, metric, outcome)
     flag = " n.s." if not low > 0 and not high < 0 else ""
-    jack = getattr(found, f"{kind}_jack").get((scenario, metric, outcome))
-    mark = "†" if found.lopsided(kind, scenario, metric, outcome) and jack is not None and np.isfinite(
-        jackknife_interval(point, jack)[0]) else ""
+    mark = "†" if found.uses_jackknife(kind, scenario, metric, outcome) else ""
     return f"{point:+.2f} [{low:+.2f}, {high:+.2f}]{mark}{flag}"
 
 
