@@ -130,11 +130,10 @@ def _plot(found: Correlations, path: Path) -> Path:
                 means = found.means[scenario]
                 axis.scatter(metric_sign * means[metric_column], outcome_sign * means[outcome_column], s=12,
                              color=colours[index % len(colours)], label=scenario)
-            axis.set_title(f"ρ {found.spearman[('all', metric, outcome)]:+.2f}", fontsize=8)
+            axis.set_title(f"{outcome} vs {metric}: ρ {found.spearman[('all', metric, outcome)]:+.2f}", fontsize=8)
             axis.tick_params(labelsize=7)
             axis.set_xlabel(metric, fontsize=8)
-            if col == 0:
-                axis.set_ylabel(outcome, fontsize=8)
+            axis.set_ylabel(outcome, fontsize=8)
     axes[0][0].legend(fontsize=7, loc="best")
     figure.tight_layout()
     save_figure(figure, path, dpi=80)
