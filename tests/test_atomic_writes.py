@@ -18,10 +18,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import pyarrow as pa  # noqa: E402
 import pytest  # noqa: E402
 
-from simrig.benchmark.results import write_table_atomic  # noqa: E402
 from simrig.dataset import outputs  # noqa: E402
 from simrig.dataset.manifest import write_json_atomic  # noqa: E402
-from simrig.dataset.outputs import save_figure, write_bytes_atomic, write_text_atomic  # noqa: E402
+from simrig.dataset.outputs import (  # noqa: E402
+    save_figure,
+    write_bytes_atomic,
+    write_table_atomic,  # noqa: E402
+    write_text_atomic,
+)
 from simrig.scoring.attribution import ERRORS_SCHEMA  # noqa: E402
 from simrig.scoring.results import ScoreReport  # noqa: E402
 

@@ -10,12 +10,12 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..dataset.manifest import write_json_atomic
-from ..dataset.outputs import check_output_path, check_own_folder, folder_lock
+from ..dataset.outputs import check_output_path, check_own_folder, folder_lock, write_table_atomic
 from ..pipeline.cache import check_cache_folder
 from .engine_names import ENGINES
 from .engines import Interrupted, local_engine, machine_workers, ray_engine
 from .plan import FRAME_SECONDS, Plan, make_plan
-from .results import TABLES, assemble, finished, write_fragment, write_table_atomic
+from .results import TABLES, assemble, finished, write_fragment
 from .suite import SuiteError, load_suite
 
 BENCH_FILE = "bench.json"

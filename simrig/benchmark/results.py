@@ -21,12 +21,10 @@ import math
 from pathlib import Path
 
 import pyarrow as pa
-import pyarrow.parquet as pq
 
 from simrig.reading import read_json
 
 from ..dataset.manifest import write_json_atomic
-from ..dataset.outputs import atomic_file
 from .evaluate import CAMERA_METRICS, METRIC_COLUMNS, Outcome
 from .plan import Plan, tracker_key
 
@@ -143,8 +141,3 @@ def _causes_schema() -> pa.Schema:
     return pa.schema(_point_fields() + [("dimension", pa.string()), ("cause", pa.string()),
                                         ("kind", pa.string()), ("count", pa.int64())])
 
-
-def write_table_atomic(table: pa.Table, path: Path) -> None:
-    """Parquet through a temporary sibling, flushed, then renamed (:func:`~simrig.dataset.outputs.atomic_file`)."""
-    with atomic_file(path) as temporary:
-        pq.write_table(table, temporary)

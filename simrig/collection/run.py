@@ -26,9 +26,8 @@ from simrig.scenarios.search_schema import MAX_SEQUENCES
 
 from ..benchmark.engine_names import ENGINES
 from ..benchmark.engines import Interrupted, local_map, machine_workers, ray_map, require_ray
-from ..benchmark.results import write_table_atomic
 from ..dataset.manifest import write_json_atomic
-from ..dataset.outputs import check_no_links, check_output_path, check_own_folder, folder_lock
+from ..dataset.outputs import check_no_links, check_output_path, check_own_folder, folder_lock, write_table_atomic
 from ..pipeline.generate import check_generable
 from ..reading import read_capped
 from ..search.space import SearchError

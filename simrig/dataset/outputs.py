@@ -19,8 +19,12 @@ import shutil
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import SimrigError
+
+if TYPE_CHECKING:
+    import pyarrow as pa
 from ..reading import read_capped
 
 SYSTEM_FOLDERS = ("/proc", "/sys", "/dev", "/etc", "/boot", "/bin", "/sbin", "/lib", "/lib32", "/lib64", "/usr",
@@ -265,3 +269,12 @@ def remove_stale_partials(out: Path) -> None:
             continue  # not a folder simrig made: a user's, whatever its name
         if not pid.isdigit() or int(pid) == os.getpid() or not _pid_alive(int(pid)):
             shutil.rmtree(stale, ignore_errors=True)
+
+
+def write_table_atomic(table: pa.Table, path: Path) -> None:
+    """Parquet through a temporary sibling, flushed, then renamed (:func:`atomic_file`): the one way a table is
+    written outside a dataset (a bench's results, a collection's index, a search's evaluations)."""
+    import pyarrow.parquet as pq  # here: importing this module (every command's output checks) loads no Arrow
+
+    with atomic_file(path) as temporary:
+        pq.write_table(table, temporary)

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from simrig.benchmark.results import PARAMETER_PREFIX, write_table_atomic
-from simrig.dataset.outputs import save_figure, write_text_atomic
+from simrig.benchmark.results import PARAMETER_PREFIX
+from simrig.dataset.outputs import save_figure, write_table_atomic, write_text_atomic
 from simrig.markdown import table
 
 from . import coverage
