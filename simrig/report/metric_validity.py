@@ -76,37 +76,42 @@ class Correlations:
     """Jackknife replicates (each seed left out once), for the intervals' acceleration."""
 
     def interval(self, kind: str, scenario: str, metric: str, outcome: str) -> tuple[float, float]:
-        """The 95 % interval of ``kind`` (``spearman`` or ``kendall``): BCa, or the jackknife's where the
-        bootstrap is lopsided (:meth:`lopsided`)."""
+        """The 95 % interval of ``kind`` (``spearman`` or ``kendall``) (:func:`interval_of`)."""
         key = (scenario, metric, outcome)
-        point, boot, jack = getattr(self, kind)[key], getattr(self, f"{kind}_boot")[key], getattr(
-            self, f"{kind}_jack").get(key)
-        if self.uses_jackknife(kind, scenario, metric, outcome):
-            low, high = jackknife_interval(point, jack)
-            return max(low, -1.0), min(high, 1.0)  # a correlation's range
-        return bca_interval(point, boot, jack)
+        return interval_of(getattr(self, kind)[key], getattr(self, f"{kind}_boot")[key],
+                           getattr(self, f"{kind}_jack").get(key), bound=1.0)
 
     def uses_jackknife(self, kind: str, scenario: str, metric: str, outcome: str) -> bool:
-        """Whether :meth:`interval` gives the jackknife's interval: fewer than 10 % of the bootstrap replicates lie
-        on one side of the estimate (:func:`lopsided`) and the jackknife has an interval of some width (with few
-        configurations every seed left out can give the same ranks: then BCa's stands)."""
+        """Whether :meth:`interval` gives the jackknife's interval (:func:`takes_jackknife`)."""
         key = (scenario, metric, outcome)
-        jack = getattr(self, f"{kind}_jack").get(key)
-        return jack is not None and lopsided(getattr(self, kind)[key], getattr(self, f"{kind}_boot")[key]) and \
-            _usable(jackknife_interval(getattr(self, kind)[key], jack))
+        return takes_jackknife(getattr(self, kind)[key], getattr(self, f"{kind}_boot")[key],
+                               getattr(self, f"{kind}_jack").get(key))
 
     def difference(self, scenario: str, first: str, second: str, outcome: str) -> tuple[float, float, float]:
         """Spearman ρ(first) − ρ(second) with outcome, and its paired 95 % interval (as :meth:`interval`)."""
         key_a, key_b = (scenario, first, outcome), (scenario, second, outcome)
         point = self.spearman[key_a] - self.spearman[key_b]
-        boot = self.spearman_boot[key_a] - self.spearman_boot[key_b]
         jack = None
         if key_a in self.spearman_jack and key_b in self.spearman_jack:
             jack = self.spearman_jack[key_a] - self.spearman_jack[key_b]
-        if jack is not None and lopsided(point, boot) and _usable(jackknife_interval(point, jack)):
-            low, high = jackknife_interval(point, jack)
-            return point, max(low, -2.0), min(high, 2.0)  # a difference of two correlations' range
-        return (point, *bca_interval(point, boot, jack))
+        boot = self.spearman_boot[key_a] - self.spearman_boot[key_b]
+        return (point, *interval_of(point, boot, jack, bound=2.0))
+
+
+def takes_jackknife(point: float, boot: np.ndarray, jack: np.ndarray | None) -> bool:
+    """Whether the jackknife's interval stands in for BCa's: fewer than 10 % of the bootstrap replicates lie on one
+    side of the estimate (:func:`lopsided`) and the jackknife has an interval of some width (with few
+    configurations every seed left out can give the same ranks: then BCa's stands)."""
+    return jack is not None and lopsided(point, boot) and _usable(jackknife_interval(point, jack))
+
+
+def interval_of(point: float, boot: np.ndarray, jack: np.ndarray | None, *, bound: float) -> tuple[float, float]:
+    """The 95 % interval of a statistic within [−bound, bound]: BCa's (:func:`bca_interval`), or the jackknife's
+    (:func:`jackknife_interval`, clipped to the range) where :func:`takes_jackknife`."""
+    if takes_jackknife(point, boot, jack):
+        low, high = jackknife_interval(point, jack)
+        return max(low, -bound), min(high, bound)
+    return bca_interval(point, boot, jack)
 
 
 def _usable(interval: tuple[float, float]) -> bool:
