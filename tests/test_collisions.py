@@ -131,6 +131,20 @@ def _plant_a_crash_at_frame_1(monkeypatch) -> list[int]:
     return crashed
 
 
+def test_a_run_refused_for_a_crash_leaves_no_run_folder(tmp_path, capsys):
+    """``simrig run`` of a scenario that refuses crashes, on a seed whose traffic crashes: one line, and the run
+    folder it would have made is not left behind (empty)."""
+    from simrig.cli import main
+
+    (tmp_path / "no_crash.toml").write_text('extends = "intersection_surround6"\nname = "no_crash"\n'
+                                            '[render]\nvisibility = false\n[traffic]\ncrashes = "refused"\n')
+    out = tmp_path / "run"
+    assert main(["run", str(tmp_path / "no_crash.toml"), "--seed", "0", "--frames", "20", "--out", str(out),
+                 "--quiet"]) == 2
+    assert "collide at frame 18, and the scenario refuses crashes" in capsys.readouterr().err
+    assert not out.exists()
+
+
 CRASHING_SUITE = """
 name = "crashes"
 scenarios = ["no_crash.toml"]

@@ -79,8 +79,13 @@ def test_the_report_section_states_the_best_predictor_and_draws_the_figure(tmp_p
                          {"suite_settings": {"closed_loop": True, "scores_on": "reference"}})
     text = "\n".join(metric_validity_section(bench, tmp_path))
     assert "- **progress lost**: AMOTA, ρ +1.00 [+1.00, +1.00]" in text or "- **progress lost**: PKL, ρ +1.00" in text
-    assert "ground-truth drive (the log" in text and "6 on a, 6 on b" in text
+    assert "ground-truth drive, the log, where the tracker ran open loop" in text and "6 on a, 6 on b" in text
     assert (tmp_path / FIGURE).read_bytes()[:4] == b"\x89PNG"
+    calm = bench_rows().assign(drive_collision=0.0)  # no drive collided: that outcome orders nothing
+    text = "\n".join(metric_validity_section(BenchResults(tmp_path, calm, pd.DataFrame(), {"suite_settings": {}}),
+                                              tmp_path))
+    assert "- **collision**: the same in every configuration (e.g. no drive collided): nothing to predict" in text
+    assert "nan" not in text
     few = BenchResults(tmp_path, bench_rows(configurations=2), pd.DataFrame(), {"suite_settings": {}})
     assert "Not computed: scenario a: 2 configurations" in "\n".join(metric_validity_section(few, tmp_path))
 
@@ -144,7 +149,7 @@ def test_degraded_refuses_what_it_cannot_do():
 
     with pytest.raises(ValueError, match="latency_s=-1.0 must be a number in"):
         create("degraded", latency_s=-1.0)
-    with pytest.raises(ValueError, match="not 'degraded'"):
+    with pytest.raises(ValueError, match="parameter tracker must name another tracker, not this one"):
         create("degraded", tracker="degraded")
     with pytest.raises(KeyError, match="unknown tracker 'nope'"):
         create("degraded", tracker="nope")

@@ -95,10 +95,10 @@ def degraded(*, tracker: str = "saga", latency_s: float = 0.0, identity_change_h
     from .registry import create
 
     if tracker == "degraded":
-        raise ValueError("degraded: tracker must name another tracker, not 'degraded'")
+        raise ValueError("parameter tracker must name another tracker, not this one")
     for name, value, top in (("latency_s", latency_s, MAX_LATENCY_S), ("identity_change_hz", identity_change_hz,
                              1e6), ("velocity_sigma_mps", velocity_sigma_mps, 1e6)):
         if not (0.0 <= float(value) <= top):
-            raise ValueError(f"degraded: {name}={value!r} must be a number in [0, {top:g}]")
+            raise ValueError(f"{name}={value!r} must be a number in [0, {top:g}]")
     return DegradedTracker(create(tracker), latency_s=latency_s, identity_change_hz=identity_change_hz,
                            velocity_sigma_mps=velocity_sigma_mps)

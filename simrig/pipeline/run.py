@@ -140,7 +140,14 @@ def run_pipeline(
                 f"{', no images' if images else ''}); "
                 "pass --overwrite to replace it or choose another --out")
         started = time.perf_counter()
-        generate(loaded, seed=seed, out=folder, frames=frames, overwrite=overwrite, progress=progress, images=images)
+        existed = out.exists()
+        try:
+            generate(loaded, seed=seed, out=folder, frames=frames, overwrite=overwrite, progress=progress,
+                     images=images)
+        except BaseException:
+            if not existed and out.is_dir() and not any(out.iterdir()):  # a run folder this call made, still empty
+                out.rmdir()
+            raise
         generation_s = time.perf_counter() - started
     dataset = Dataset.open(folder)
     reference = tracker if isinstance(tracker, str) else tracker_reference(tracker)

@@ -66,7 +66,7 @@ def _header(bench: BenchResults, out: Path) -> list[str]:
         settings.get("description", ""), "",
         f"Produced by `{bench.description['command']}` then `simrig report {bench.description['out']}"
         f"{'' if out == Path('reports') / bench.suite else f' --out {out}'}`. "
-        f"{frame['scenario'].nunique()} scenarios, seeds "
+        f"{frame['scenario'].nunique()} scenario{'s' * (frame['scenario'].nunique() != 1)}, seeds "
         f"{', '.join(str(s) for s in settings['seeds'])}; {len(bench.description['cells'])} cells (distinct "
         f"datasets), {len(frame)} result rows (point × tracker). The tables here are `{RESULTS}` and `{CAUSES}` "
         "in this folder.", "",

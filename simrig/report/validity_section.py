@@ -31,7 +31,7 @@ def metric_validity_section(bench: BenchResults, out: Path) -> list[str]:
         found = correlate(bench.results)
     except TooFewCells as error:
         return lines + [f"Not computed: {error}.", ""]
-    world = ("the world of the cell's ground-truth drive (the log; the tracker run open loop there)"
+    world = ("the world of the cell's ground-truth drive, the log, where the tracker ran open loop"
              if bench.description["suite_settings"].get("scores_on") == "reference" else
              "the world each tracker drove itself (so a drive that went wrong is also scored on what followed)")
     lines += [
@@ -84,11 +84,16 @@ def _verdicts(found: Correlations) -> list[str]:
     """Per outcome: the metric with the highest mean ρ, its lead over the runner-up and over AMOTA (paired)."""
     lines = ["Best predictor of each outcome (highest mean ρ), and its lead, paired on the same replicates:", ""]
     for outcome, _, _ in OUTCOMES:
-        ranked = sorted((metric for metric, _, _ in METRICS), key=lambda m: -found.spearman[("all", m, outcome)])
-        best, runner = ranked[0], ranked[1]
+        ranked = sorted((metric for metric, _, _ in METRICS if np.isfinite(found.spearman[("all", metric, outcome)])),
+                        key=lambda m: -found.spearman[("all", m, outcome)])
+        if not ranked:
+            lines.append(f"- **{outcome}**: the same in every configuration (e.g. no drive collided): nothing to "
+                         "predict")
+            continue
+        best = ranked[0]
         text = f"- **{outcome}**: {best}, ρ {_cell(found, 'spearman', 'all', best, outcome)}"
-        for other in dict.fromkeys((runner, "AMOTA")):
-            if other != best:
+        for other in dict.fromkeys((*ranked[1:2], "AMOTA")):
+            if other != best and other in ranked:
                 point, low, high = found.difference("all", best, other, outcome)  # jackknife's where lopsided
                 flag = " n.s." if low <= 0 <= high else ""
                 text += f"; ahead of {other} by {point:+.2f} [{low:+.2f}, {high:+.2f}]{flag}"
