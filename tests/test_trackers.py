@@ -285,6 +285,42 @@ def test_mutr3d_associates_in_the_image_and_updates_in_3d_from_every_camera_that
         assert [track.track_id for track in t.step(far)] == expected, cost2d
 
 
+# -- the constant-velocity filter: AB3DMOT's noise, and the lag theory predicts --------------------------------
+def test_a_10_hz_step_uses_ab3dmot_process_noise_in_si_units():
+    # AB3DMOT's KF (its code): Q = I, velocity block × 0.01, per 0.1 s KITTI frame, velocity in metres per frame.
+    # In metres per second the velocity variance is 0.01 / 0.1² = 1 (m/s)² a step; positions stay 1 m².
+    from simrig.trackers.motion import KalmanConfig, new_filter, predict
+    kf = new_filter(np.array([0.0, 0.0, 0.0, 4.5, 1.9, 1.6, 0.0, 10.0, 0.0]), KalmanConfig())
+    kf.P = np.zeros((10, 10))
+    predict(kf, 0.1, KalmanConfig())
+    assert np.allclose(np.diag(kf.P), [1.0] * 7 + [1.0] * 3)
+
+
+def test_constant_velocity_filter_lags_a_braking_car_as_the_alpha_beta_filter_predicts():
+    # A car braking at a constant a, measured exactly every T: a steady-state Kalman filter of a constant-velocity
+    # model is an α-β filter, whose velocity error settles at a·T·(α/β − 1/2) (the innovation r = aT²/β is constant
+    # and the update adds α·r to the position). α and β come from the steady-state gain of scipy's Riccati solver.
+    from scipy.linalg import solve_discrete_are
+    from simrig.trackers.motion import KalmanConfig, new_filter, predict, update
+    config, T, a, v0 = KalmanConfig(), 0.1, 1.0, 40.0
+    F = np.array([[1.0, T], [0.0, 1.0]])
+    Q = np.diag([config.process_variance, config.process_velocity_variance]) * T
+    P = solve_discrete_are(F.T, np.array([[1.0], [0.0]]), Q, np.array([[config.measurement_variance]]))
+    alpha, beta = P[0, 0] / (P[0, 0] + 1.0), P[1, 0] / (P[0, 0] + 1.0) * T
+    expected = a * T * (alpha / beta - 0.5)
+
+    def box(k):
+        t = k * T
+        return np.array([v0 * t - a * t * t / 2, 0.0, 0.0, 4.5, 1.9, 1.6, 0.0, v0 - a * t, 0.0])
+
+    kf = new_filter(box(0), config)
+    for k in range(1, 300):
+        predict(kf, T, config)
+        update(kf, box(k)[:7])
+    assert kf.x[7, 0] - box(299)[7] == pytest.approx(expected, rel=1e-3)
+    assert 0.5 < expected < 1.5  # 1 m/s² → a lag of about 0.85 m/s with AB3DMOT's noise
+
+
 # -- polymot: the modern filter baseline -------------------------------------------------------------------------
 @pytest.mark.parametrize("model_name", ["CTRA", "BICYCLE"])
 def test_turning_models_jacobian_matches_finite_differences(model_name):

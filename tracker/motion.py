@@ -29,15 +29,20 @@ class KalmanConfig:
     velocity [(m/s)²] (unobserved at birth); process_variance: Q of the measured components per second
     [m²/s, rad²/s]; process_velocity_variance: Q of the velocity per second [(m/s)²/s];
     measurement_variance: R [m², rad²]; birth_velocity_variance: P₀ of the velocity [(m/s)²] when the
-    starting detection carries a velocity estimate (monocular 3D detectors do). Q scales with Δt: AB3DMOT's
-    per-frame values are taken as per-second values here, so a dropped frame widens the
-    prediction as a longer step should.
+    starting detection carries a velocity estimate (monocular 3D detectors do).
+
+    Q scales with Δt, so a dropped frame widens the prediction as a longer step should. The defaults are
+    AB3DMOT's (Weng et al., IROS 2020; its code's ``KF``: Q = I with the velocity block × 0.01), which are per
+    frame at KITTI's 10 Hz with the velocity in metres per frame: 1 m² and 0.01 (m/frame)² = 1 (m/s)² a
+    0.1 s step, i.e. 10 m²/s and 10 (m/s)²/s here — so a 10 Hz run steps with exactly AB3DMOT's Q, and other
+    rates with the same noise per second. Its P₀ of the velocity, 10⁴ (m/frame)² = 10⁶ (m/s)², is kept at
+    10⁴ (m/s)² (a standard deviation of 100 m/s is already no knowledge of a car's speed).
     """
 
     initial_variance: float = 10.0
     initial_velocity_variance: float = 10000.0
-    process_variance: float = 1.0
-    process_velocity_variance: float = 0.01
+    process_variance: float = 10.0
+    process_velocity_variance: float = 10.0
     measurement_variance: float = 1.0
     birth_velocity_variance: float = 4.0
 
