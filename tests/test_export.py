@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 import pytest
 import trackeval
@@ -195,3 +196,80 @@ def test_an_export_under_ego_pose_error_scores_in_trackeval_as_in_simrig(driftin
     assert tracks.num_rows and not (run.out / "tracks2d.parquet").exists()  # 3D only: the export projects it
     out = export(drifting_dataset, "motchallenge", tmp_path / "mot", tracks=run.out)
     assert_equal_to_trackeval(score(drifting_dataset, run.out), trackeval_on(out, "gh"))
+
+
+# ------------------------------------------------------------------------------------------ capture timing
+@pytest.fixture(scope="module")
+def timed_dataset(tmp_path_factory):
+    """A small dataset whose cameras fire one after another (sweep, 50 ms spread) and whose CAM_BACK takes an image
+    every 2nd frame and CAM_FRONT every 4th."""
+    from simrig.scenarios import load_scenario
+
+    from simrig.dataset import Dataset
+    from simrig.pipeline.generate import generate
+
+    folder = tmp_path_factory.mktemp("timed")
+    (folder / "timed.toml").write_text(
+        'extends = "highway_surround6"\nframes = 24\n[traffic]\nvehicles = 12\nwindow_radius_m = 90.0\n'
+        "spawn_min_distance_m = 60.0\n[render]\nvisibility = false\n"
+        '[sensor.capture]\ntrigger = "sweep"\nspread_s = 0.05\nrate_hz = { CAM_BACK = 5.0, CAM_FRONT = 2.5 }\n')
+    generate(load_scenario(folder / "timed.toml"), seed=3, out=folder / "ds", progress=False)
+    return Dataset.open(folder / "ds")
+
+
+def _rotate(quaternion, vector):
+    """``vector`` rotated by the unit quaternion (w, x, y, z): v + 2w(q×v) + 2q×(q×v)."""
+    w, q = quaternion[0], np.asarray(quaternion[1:])
+    return vector + 2 * w * np.cross(q, vector) + 2 * np.cross(q, np.cross(q, vector))
+
+
+def test_the_nuscenes_export_stamps_each_camera_image_with_its_capture_time(timed_dataset, tmp_path):
+    out = export(timed_dataset, "nuscenes", tmp_path / "nu")
+    tables = {name: json.loads((out / "v1.0-simrig" / f"{name}.json").read_text())
+              for name in ("sample", "sample_data", "calibrated_sensor", "sensor", "ego_pose")}
+    captures = pq.read_table(timed_dataset.path / "captures.parquet").to_pylist()
+    egos = pq.read_table(timed_dataset.path / "ego_poses.parquet").to_pylist()
+    sensors = {s["token"]: s["channel"] for s in tables["sensor"]}
+    calibration = {c["token"]: c for c in tables["calibrated_sensor"]}
+    poses = {p["token"]: p for p in tables["ego_pose"]}
+    samples = {s["token"]: s for s in tables["sample"]}
+    images = {}
+    for record in tables["sample_data"]:
+        channel = sensors[calibration[record["calibrated_sensor_token"]]["sensor_token"]]
+        if channel != "LIDAR_TOP":
+            images[channel, int(record["sample_token"].rsplit("-", 1)[1])] = record
+    fired = [c for c in captures if c["fired"]]
+    assert len(images) == len(fired) and len(fired) < len(captures)  # the slow cameras skip frames
+    for capture in fired:
+        record = images[capture["camera"], capture["frame"]]  # the surround rig's names are nuScenes channels
+        assert record["timestamp"] == round(capture["capture_time"] * 1e6)
+        offset = capture["capture_time"] - samples[record["sample_token"]]["timestamp"] * 1e-6
+        ego, pose = egos[capture["frame"]], poses[record["ego_pose_token"]]
+        moved = [ego["x"] + ego["vx"] * offset, ego["y"] + ego["vy"] * offset]
+        assert pose["translation"][:2] == pytest.approx(moved)
+    front = sorted(frame for channel, frame in images if channel == "CAM_FRONT")
+    assert front == list(range(0, 24, 4))
+    chain = [images["CAM_FRONT", frame] for frame in front]
+    assert [r["next"] for r in chain[:-1]] == [r["token"] for r in chain[1:]] and chain[-1]["next"] == ""
+    for camera in timed_dataset.rig.camera_names:  # the mount: the optical axis (camera z) along the camera's yaw
+        mounted = calibration[f"calibrated-{camera}"]
+        spec = timed_dataset.rig.camera(camera)
+        axis = _rotate(mounted["rotation"], np.array([0.0, 0.0, 1.0]))
+        assert axis == pytest.approx([np.cos(spec.yaw), np.sin(spec.yaw), 0.0], abs=1e-9)
+        assert mounted["camera_intrinsic"] == [[spec.fx, 0.0, spec.cx], [0.0, spec.fy, spec.cy], [0.0, 0.0, 1.0]]
+
+
+def test_a_slow_camera_s_motchallenge_sequence_scores_in_trackeval_as_in_simrig(timed_dataset, tmp_path):
+    run = run_tracker(timed_dataset, "sort", tmp_path / "sort")
+    before = score(timed_dataset, run.out).metrics2d["per_camera"]["CAM_FRONT"]["CLR_FP"]
+    table = pq.read_table(run.out / "tracks2d.parquet")  # one more box, in CAM_FRONT at frame 1: it took no image
+    front = table.filter(pc.equal(table.column("camera"), "CAM_FRONT")).slice(0, 1).to_pylist()[0]
+    front.update(frame=1, track_id=999_999)
+    pq.write_table(pa.concat_tables([table, pa.Table.from_pylist([front], schema=table.schema)]),
+                   run.out / "tracks2d.parquet")
+    report = score(timed_dataset, run.out)
+    assert report.metrics2d["per_camera"]["CAM_FRONT"]["CLR_FP"] == before + 1
+    out = export(timed_dataset, "motchallenge", tmp_path / "mot", tracks=run.out)
+    assert_equal_to_trackeval(report, trackeval_on(out, "sort"))
+    front = (out / "gt" / "mot_challenge" / "SIMRIG-test" / "CAM_FRONT-car" / "seqinfo.ini").read_text()
+    assert "frameRate=10\n" in front and "cameraRate=2.5\n" in front and "seqLength=24\n" in front

@@ -11,7 +11,10 @@ class is in the sequence name) on both sides, and 8 (``distractor``) for ground 
 ignores: TrackEval's preprocessing then removes the tracker boxes matched to it and the box itself, exactly
 as ``simrig score`` does; ground truth ignored only as not evaluated (an imported MOTChallenge row of another
 class) is written with ``consider`` 0, which TrackEval matches but neither scores nor lets remove a tracker box.
-Evaluate with
+Frames are the scene's frames, in every sequence: ``seqinfo.ini`` gives the scene's ``frameRate``, and a camera
+slower than the frame rate (``sensor.capture.rate_hz``) has no image, no ground truth and so nothing to match at the
+frames it skips (a tracker's box there is a false positive, as in ``simrig score``); its own rate is the extra key
+``cameraRate`` [Hz], which TrackEval ignores. Evaluate with
 ``trackeval.datasets.MotChallenge2DBox({"GT_FOLDER": OUT/gt/mot_challenge, "TRACKERS_FOLDER":
 OUT/trackers/mot_challenge, "BENCHMARK": "SIMRIG", "SPLIT_TO_EVAL": "test"})``.
 """
@@ -37,6 +40,15 @@ def _lines(frame, ids, boxes, conf, classes, visibility: int) -> str:
         f"{visibility}\n"
         for f, i, b, c, k in zip(frame[order], ids[order], boxes[order], conf[order], classes[order], strict=True)
     )
+
+
+def camera_rate(capture_offsets: np.ndarray | None, camera: int, frame_rate: float) -> float:
+    """[Hz] how often camera ``camera`` took an image: the frame rate divided by the frames between its first two
+    images (capture offsets ``(F, C)`` [s], NaN where it took none; ``None``: every camera at every frame)."""
+    if capture_offsets is None:
+        return frame_rate
+    shots = np.flatnonzero(np.isfinite(capture_offsets[:, camera]))
+    return frame_rate / int(shots[1] - shots[0]) if len(shots) > 1 else frame_rate
 
 
 def write(data: ExportInput, out: Path) -> None:
@@ -69,6 +81,7 @@ def write(data: ExportInput, out: Path) -> None:
                        1))
             (folder / "seqinfo.ini").write_text(
                 f"[Sequence]\nname={name}\nseqLength={len(truth.frames)}\nframeRate={frame_rate:g}\n"
+                f"cameraRate={camera_rate(truth.capture_offsets, c, frame_rate):g}\n"
                 f"imWidth={cam.width}\nimHeight={cam.height}\nimExt=.png\n")
             if data.rows2d is not None:
                 t = track_rows if agnostic else track_rows[data.rows2d.label[track_rows] == label]

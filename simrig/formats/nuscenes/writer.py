@@ -4,13 +4,15 @@ results format (``OUT/ground_truth.json``) and, with 3D tracks, the tracker's re
 **Tables** (``OUT/v1.0-simrig/*.json``, loaded by ``nuscenes.NuScenes(version="v1.0-simrig", dataroot=OUT)``):
 one ``scene`` named ``SCENARIO-seedN``, a ``sample`` per frame (token ``SCENARIO-seedN-FFFFFF``, ``timestamp``
 the frame's time [µs]), a ``LIDAR_TOP`` key-frame ``sample_data`` per sample with its ``ego_pose`` (the ego's
-position and yaw; the devkit's range filter reads it), an ``instance`` per actor and a ``sample_annotation`` per
-(frame, actor) with ``translation``, ``size``, ``rotation`` as below, ``prev``/``next`` links, the category of
-its class (car ``vehicle.car``, truck ``vehicle.truck``, bus ``vehicle.bus.rigid``, motorcycle
-``vehicle.motorcycle``, bicycle ``vehicle.bicycle``, pedestrian ``human.pedestrian.adult``) and ``velocity``
-(exact, [m/s]; not a nuScenes field: the devkit ignores it and ``simrig import`` reads it). simrig has no lidar:
-``num_lidar_pts`` is 1 for every box (0 would make the devkit drop it), ``num_radar_pts`` 0, no visibility
-token. ``OUT/v1.0-simrig/splits.json`` defines the split ``simrig`` (the scene), so the devkit's tracking
+position and yaw; the devkit's range filter reads it), a ``CAM_*`` key-frame ``sample_data`` per camera and
+frame it took an image at, stamped with its capture time (:mod:`simrig.formats.nuscenes.cameras`), an
+``instance`` per actor and a ``sample_annotation`` per (frame, actor) with ``translation``, ``size``, ``rotation``
+as below, ``prev``/``next`` links, the category of its class (car ``vehicle.car``, truck ``vehicle.truck``, bus
+``vehicle.bus.rigid``, motorcycle ``vehicle.motorcycle``, bicycle ``vehicle.bicycle``, pedestrian
+``human.pedestrian.adult``) and ``velocity`` (exact, [m/s]; not a nuScenes field: the devkit ignores it and
+``simrig import`` reads it). simrig has no lidar: ``num_lidar_pts`` is 1 for every box (0 would make the devkit
+drop it), ``num_radar_pts`` 0, no visibility token.
+``OUT/v1.0-simrig/splits.json`` defines the split ``simrig`` (the scene), so the devkit's tracking
 evaluation runs on the export as it is::
 
     TrackingEval(config_factory("tracking_nips_2019"), "OUT/NAME.json", "simrig", "OUT/devkit",
@@ -37,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from simrig.formats.export_input import ExportError, ExportInput
+from simrig.formats.nuscenes.cameras import camera_tables, yaw_quaternion
 from simrig.formats.nuscenes.samples import sample_token
 
 META = {"use_camera": True, "use_lidar": False, "use_radar": False, "use_map": False, "use_external": False}
@@ -45,11 +48,6 @@ CATEGORY = {"car": "vehicle.car", "truck": "vehicle.truck", "bus": "vehicle.bus.
             "motorcycle": "vehicle.motorcycle", "bicycle": "vehicle.bicycle", "pedestrian": "human.pedestrian.adult"}
 """The nuScenes category written for each class (one the devkit's ``category_to_tracking_name`` maps back)."""
 LIDAR = "LIDAR_TOP"
-
-
-def _quaternion(yaw: float) -> list[float]:
-    """Unit quaternion (w, x, y, z) of a rotation by ``yaw`` [rad] about +z."""
-    return [float(np.cos(yaw / 2)), 0.0, 0.0, float(np.sin(yaw / 2))]
 
 
 def tables(data: ExportInput) -> dict[str, list[dict]]:
@@ -79,12 +77,14 @@ def tables(data: ExportInput) -> dict[str, list[dict]]:
                               "prev": samples[k - 1] if k else "",
                               "next": samples[k + 1] if k + 1 < len(samples) else ""})
         out["ego_pose"].append({"token": f"ego-{sample}", "timestamp": time, "translation": [ego.x, ego.y, ego.z],
-                                "rotation": _quaternion(ego.yaw)})
+                                "rotation": yaw_quaternion(ego.yaw)})
         out["sample_data"].append({"token": f"lidar-{sample}", "sample_token": sample,
                                    "ego_pose_token": f"ego-{sample}", "calibrated_sensor_token": "calibrated-lidar",
                                    "timestamp": time,
                                    "fileformat": "", "is_key_frame": True, "height": 0, "width": 0, "filename": "",
                                    "prev": "", "next": ""})
+    for table, records in camera_tables(data, samples, times).items():
+        out[table].extend(records)
     order = np.lexsort((truth.frame, truth.actor_id))  # by actor, then frame: each instance's annotations in turn
     annotation = [f"{scene}-actor{truth.actor_id[r]}-{truth.frame[r]:06d}" for r in range(len(truth.frame))]
     starts = np.flatnonzero(np.r_[True, truth.actor_id[order][1:] != truth.actor_id[order][:-1]])
@@ -101,7 +101,7 @@ def tables(data: ExportInput) -> dict[str, list[dict]]:
                 "token": annotation[r], "sample_token": token(data, truth.frame[r]), "instance_token": instance,
                 "visibility_token": "", "attribute_tokens": [],
                 "translation": [float(box[0]), float(box[1]), float(box[2])],
-                "size": [float(box[4]), float(box[3]), float(box[5])], "rotation": _quaternion(float(box[6])),
+                "size": [float(box[4]), float(box[3]), float(box[5])], "rotation": yaw_quaternion(float(box[6])),
                 "velocity": [float(box[7]), float(box[8])], "num_lidar_pts": 1, "num_radar_pts": 0,
                 "prev": annotation[rows[j - 1]] if j else "",
                 "next": annotation[rows[j + 1]] if j + 1 < len(rows) else ""})
