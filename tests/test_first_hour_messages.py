@@ -332,3 +332,14 @@ def test_a_tracker_that_ignores_the_alarm_is_still_stopped_with_one_line(small_d
     assert done.stderr.strip().splitlines()[-1].startswith("simrig: error: tracker 'stubborn:Stubborn': frame 0")
     assert "could not be stopped (it ignores or replaced SIGALRM" in done.stderr
     assert not (tmp_path / "t").exists()
+
+
+def test_a_tracker_that_reports_nothing_in_the_whole_run_is_warned_about(small_dataset, tmp_path, capsys):
+    # a latency of 5 s on a 3 s dataset: every track would arrive after the run
+    assert main(["track", str(small_dataset.path), "--tracker", "degraded", "--param", "latency_s=5",
+                 "--out", str(tmp_path / "late")]) == 0
+    err = capsys.readouterr().err
+    assert f"warning: degraded reported no track in any of the {small_dataset.frame_count} frames" in err
+    assert main(["track", str(small_dataset.path), "--tracker", "degraded", "--param", "latency_s=0.5",
+                 "--out", str(tmp_path / "early")]) == 0
+    assert "warning" not in capsys.readouterr().err

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 from simrig.scenarios import DEFAULT_SCENARIO, MAX_FRAMES
@@ -153,3 +154,13 @@ def tracker_arguments(parser: argparse.ArgumentParser) -> None:
                         help="a tracker parameter, repeatable (e.g. --param gate=4 --param life=mutr3d)")
     parser.add_argument("--frame-time-limit", type=non_negative_float, default=60.0, metavar="SECONDS",
                         help="stop the tracker when one step() runs longer than this (default 60; 0: no limit)")
+
+
+def warn_if_no_tracks(tracker: str, frames: int, track_rows: int) -> None:
+    """``warning: ...`` on stderr when a tracker reported no track in any frame of a run: the scores are then all
+    misses, which a tracker whose output latency exceeds the run (``degraded``'s ``latency_s``) or that never
+    confirms a track produces without an error."""
+    if track_rows == 0 and frames > 0:
+        print(f"warning: {tracker} reported no track in any of the {frames} frames (an output latency longer than "
+              "the run, or a tracker that never confirms a track, does this); every ground-truth box counts as "
+              "missed", file=sys.stderr)

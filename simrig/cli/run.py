@@ -7,7 +7,7 @@ from pathlib import Path
 
 from simrig.scenarios import load_scenario
 
-from .arguments import int_at_least, scenario_arguments, tracker_arguments, tracker_params
+from .arguments import int_at_least, scenario_arguments, tracker_arguments, tracker_params, warn_if_no_tracks
 from .generate import _naming_scenario_file, _warn_ineffective
 
 
@@ -88,6 +88,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             print(f"wrote     {path}")
     if not result.reused:
         _warn_ineffective(result.scenario, result.dataset)
+    warn_if_no_tracks(args.tracker, result.tracking.frames, result.tracking.track_rows)
     if args.explain:
         from ..explain import add_to_run_report, explain
 

@@ -6,7 +6,14 @@ import argparse
 from pathlib import Path
 
 from ..errors import SimrigError
-from .arguments import non_negative_float, output_path, tracker_arguments, tracker_param, tracker_params
+from .arguments import (
+    non_negative_float,
+    output_path,
+    tracker_arguments,
+    tracker_param,
+    tracker_params,
+    warn_if_no_tracks,
+)
 
 
 def register_score(commands) -> None:
@@ -93,4 +100,5 @@ def _cmd_track(args: argparse.Namespace) -> int:
         f"{result.frames_per_second:.0f} frames/s in step()"
     )
     print(f"wrote     {result.out}")
+    warn_if_no_tracks(args.tracker, result.frames, result.track_rows)
     return 0

@@ -30,17 +30,17 @@ from simrig.report.paired import paired_difference
 from simrig.scoring import score
 
 PURE_FOTA = "saga:birth_merge_m=0,duplicate_iou=0"
-TRACKERS = ("saga", PURE_FOTA, "saga:one_per_camera=0", PURE_FOTA + ",one_per_camera=0", "global_hungarian",
-            "global_hungarian:duplicate_iou=0.3", "percam_merge", "simpletrack", "mutr3d", "polymot",
-            "polymot:coast_s=0")
+TRACKERS = ("saga", PURE_FOTA, "saga:one_per_camera=false", PURE_FOTA + ",one_per_camera=false",
+            "global_hungarian", "global_hungarian:duplicate_iou=0.3", "percam_merge", "simpletrack", "mutr3d",
+            "polymot", "polymot:coast_s=0")
 """Trackers by name, a variant as ``name:key=value,key=value`` (ablations of one rule)."""
 SCORING = {"interpolation": "devkit", "2d_range": "dropped"}
 """The scoring rules a cached ``metrics.json`` was made under: one made under others is scored again."""
 LABELS = {
     "saga": "saga (as shipped: FOTA, one detection per camera, birth merge, duplicate rule)",
     PURE_FOTA: "pure FOTA (one detection per camera; no birth merge, no duplicate rule)",
-    "saga:one_per_camera=0": "saga without the per-camera constraint",
-    PURE_FOTA + ",one_per_camera=0": "pure FOTA without the per-camera constraint",
+    "saga:one_per_camera=false": "saga without the per-camera constraint",
+    PURE_FOTA + ",one_per_camera=false": "pure FOTA without the per-camera constraint",
     "global_hungarian:duplicate_iou=0.3": "global_hungarian + duplicate rule",
     "polymot:coast_s=0": "polymot without reporting coasting tracks",
 }
@@ -51,16 +51,12 @@ PAIRED_REFERENCE = "saga"
 
 
 def parse_variant(text: str) -> tuple[str, dict]:
-    """``"saga:duplicate_iou=0,life=mutr3d"`` → ``("saga", {"duplicate_iou": 0.0, "life": "mutr3d"})``."""
+    """``"saga:duplicate_iou=0,life=mutr3d"`` → ``("saga", {"duplicate_iou": 0, "life": "mutr3d"})``, each value
+    read as ``simrig track --param`` reads it."""
+    from simrig.cli.arguments import tracker_param
+
     name, _, rest = text.partition(":")
-    params: dict = {}
-    for item in filter(None, rest.split(",")):
-        key, _, value = item.partition("=")
-        try:
-            params[key] = float(value)
-        except ValueError:
-            params[key] = value
-    return name, params
+    return name, dict(tracker_param(item) for item in filter(None, rest.split(",")))
 
 
 def label(name: str) -> str:
