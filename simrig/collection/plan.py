@@ -11,12 +11,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from simrig.scenarios import Scenario
+from simrig.scenarios.space_file import Candidate
 
 from ..dataset import Dataset
 from ..dataset.outputs import check_no_links
 from ..errors import DatasetError
 from ..pipeline.generate import generate
-from ..search.space import Candidate
 from .index import sequence_counts
 
 SHARDS_FOLDER = "shards"

@@ -23,6 +23,7 @@ from tqdm import tqdm
 
 from simrig.scenarios import ScenarioError
 from simrig.scenarios.search_schema import MAX_SEQUENCES
+from simrig.scenarios.space_file import SpaceError
 
 from ..benchmark.engine_names import ENGINES
 from ..benchmark.engines import Interrupted, local_map, machine_workers, ray_map, require_ray
@@ -30,7 +31,6 @@ from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import check_no_links, check_output_path, check_own_folder, folder_lock, write_table_atomic
 from ..pipeline.generate import check_generable
 from ..reading import read_capped
-from ..search.space import SearchError
 from ..version import __version__
 from .index import index_table
 from .plan import SHARDS_FOLDER, SequenceTask, make_sequence, sequence_folder
@@ -107,17 +107,17 @@ def generate_collection(space: str | Path | GenerationSpace, *, count: int, out:
 
 def _check_options(count: int, seed: int, shard_size: int, engine: str, workers: int | None) -> None:
     if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= MAX_SEQUENCES:
-        raise SearchError(f"--count {count!r}: must be a whole number of sequences from 1 to {MAX_SEQUENCES:,}")
+        raise SpaceError(f"--count {count!r}: must be a whole number of sequences from 1 to {MAX_SEQUENCES:,}")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise SearchError(f"--seed {seed!r}: must be a non-negative integer")
+        raise SpaceError(f"--seed {seed!r}: must be a non-negative integer")
     if isinstance(shard_size, bool) or not isinstance(shard_size, int) or not 1 <= shard_size <= MAX_SEQUENCES:
-        raise SearchError(f"--shard-size {shard_size!r}: must be a whole number from 1 to {MAX_SEQUENCES:,}")
+        raise SpaceError(f"--shard-size {shard_size!r}: must be a whole number from 1 to {MAX_SEQUENCES:,}")
     if engine not in ENGINES:
-        raise SearchError(f"--engine {engine!r}: choose one of {', '.join(ENGINES)}")
+        raise SpaceError(f"--engine {engine!r}: choose one of {', '.join(ENGINES)}")
     if engine == "ray":
         require_ray()
     if workers is not None and workers < 1:
-        raise SearchError(f"--workers {workers}: must be at least 1")
+        raise SpaceError(f"--workers {workers}: must be at least 1")
 
 
 def _task(space: GenerationSpace, index: int, candidate: dict, seed: int, shard_size: int, root: str) -> SequenceTask:
@@ -125,7 +125,7 @@ def _task(space: GenerationSpace, index: int, candidate: dict, seed: int, shard_
         scenario = space.scenario_for(candidate)
         check_generable(scenario)
     except ScenarioError as error:
-        raise SearchError(f"space file {str(space.path)!r}: sequence {index} samples {candidate}, which is not a "
+        raise SpaceError(f"space file {str(space.path)!r}: sequence {index} samples {candidate}, which is not a "
                           f"valid scenario: {error}") from None
     shard, folder = sequence_folder(index, shard_size)
     return SequenceTask(index, shard, folder, sequence_seed(seed, index), candidate, scenario, root)
@@ -137,15 +137,15 @@ def _check_same_collection(out: Path, description: dict) -> None:
     if not path.exists():
         return
     try:
-        earlier = json.loads(read_capped(path, "collection file", SearchError).decode("utf-8"))
+        earlier = json.loads(read_capped(path, "collection file", SpaceError).decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise SearchError(f"{path}: not a collection file simrig wrote ({error}); choose another --out") from None
+        raise SpaceError(f"{path}: not a collection file simrig wrote ({error}); choose another --out") from None
     if not isinstance(earlier, dict):
-        raise SearchError(f"{path}: not a collection file simrig wrote; choose another --out")
+        raise SpaceError(f"{path}: not a collection file simrig wrote; choose another --out")
     differ = [key for key in IDENTITY_KEYS if earlier.get(key) != description[key]]
     if differ:
         verb = "differs" if len(differ) == 1 else "differ"
-        raise SearchError(f"--out {str(out)!r} holds another collection (its {' and '.join(differ)} {verb}): a rerun "
+        raise SpaceError(f"--out {str(out)!r} holds another collection (its {' and '.join(differ)} {verb}): a rerun "
                           "resumes only the same space, seed, count and shard size; choose another --out")
 
 

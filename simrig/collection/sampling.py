@@ -23,8 +23,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from simrig.scenarios.search_schema import Dimension
-
-from ..search.space import Candidate
+from simrig.scenarios.space_file import Candidate
 
 SETTINGS_STREAM = 0
 """Spawn key of the stream the settings are drawn from."""

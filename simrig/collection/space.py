@@ -19,10 +19,9 @@ from pydantic import ValidationError
 from simrig.scenarios import Scenario, describe_errors, dimension_labels
 from simrig.scenarios.overrides import with_setting
 from simrig.scenarios.search_schema import BASE_PATH, SEARCH_ONLY_KEYS, Dimension, SpaceConfig
-
-from ..search.space import (
+from simrig.scenarios.space_file import (
     Candidate,
-    SearchError,
+    SpaceError,
     base_scenario,
     check_dimensions,
     read_space_file,
@@ -61,7 +60,7 @@ class GenerationSpace:
 
 
 def load_generation_space(name_or_path: str | Path) -> GenerationSpace:
-    """The checked generation space of a catalog name or a file; a :class:`SearchError` naming the file and the
+    """The checked generation space of a catalog name or a file; a :class:`SpaceError` naming the file and the
     key otherwise, before any work."""
     path = space_path(name_or_path, "space")
     where = f"space file {str(path)!r}"
@@ -72,7 +71,7 @@ def load_generation_space(name_or_path: str | Path) -> GenerationSpace:
     try:
         config = SpaceConfig.model_validate(raw)
     except ValidationError as error:
-        raise SearchError(f"{where}: {describe_errors(error, dimension_labels(raw))}") from None
+        raise SpaceError(f"{where}: {describe_errors(error, dimension_labels(raw))}") from None
     bases: dict[str, Scenario] = {}
     for name in _base_names(config):  # the file's base too: a candidate without a chosen base falls back to it
         named = where if name == config.base else f"{where}: base {name!r}"
