@@ -18,7 +18,7 @@ FOLDERS = {"simrig": ROOT / "simrig", "simrig.trackers": ROOT / "tracker", "simr
 LAYERS: dict[str, tuple[str, ...]] = {
     "records": ("simrig.types", "simrig.errors", "simrig.seeding", "simrig.classes", "simrig.causes",
                 "simrig.road", "simrig.version", "simrig.lifeline", "simrig.names", "simrig.reading", "simrig.markdown",
-                "simrig.interrupts", "simrig.installation"),
+                "simrig.interrupts", "simrig.installation", "simrig.engine_names", "simrig.pools"),
     "scenarios": ("simrig.scenarios",),
     "geometry": ("simrig.geometry", "simrig.rig"),
     "trackers": ("simrig.trackers",),

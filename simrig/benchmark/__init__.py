@@ -17,7 +17,7 @@ _EXPORTS = {
 
 __all__ = [*_EXPORTS, "ENGINES"]
 
-from .engine_names import ENGINES  # noqa: E402  (light: no scorer, no trackers)
+from ..engine_names import ENGINES  # noqa: E402  (light: no scorer, no trackers)
 
 
 def __getattr__(name: str):

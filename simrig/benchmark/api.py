@@ -11,9 +11,10 @@ from tqdm import tqdm
 
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import check_output_path, check_own_folder, folder_lock, write_table_atomic
+from ..engine_names import ENGINES
 from ..pipeline.cache import check_cache_folder
-from .engine_names import ENGINES
-from .engines import Interrupted, local_engine, machine_workers, ray_engine
+from ..pools import Interrupted, machine_workers
+from .engines import run_cells
 from .plan import FRAME_SECONDS, Plan, make_plan
 from .results import TABLES, assemble, finished, write_fragment
 from .suite import SuiteError, load_suite
@@ -86,7 +87,7 @@ def _run(plan: Plan, suite: str | Path, out: Path, cache: Path, engine: str, wor
     jobs = plan.jobs(finished(out), cache.absolute())  # a task may run on another node, in another folder
     workers = min(workers or machine_workers(), max(len(jobs), 1))
     _warn_if_long(jobs, workers, engine)
-    results = local_engine(jobs, workers) if engine == "local" else ray_engine(jobs, workers, address)
+    results = run_cells(jobs, engine, workers, address)
     bar = tqdm(total=len(plan.cells), initial=len(plan.cells) - len(jobs), unit="cell", disable=not progress,
                desc=f"bench {loaded.name}")
     done_now = 0

@@ -12,7 +12,7 @@ from .arguments import EXPLAIN_MAX_SAMPLES, check_explain_options, int_at_least,
 
 def register_bench(commands) -> None:
     """``simrig bench``'s options."""
-    from simrig.benchmark.engine_names import ENGINES
+    from simrig.engine_names import ENGINES
     from simrig.scenarios import suite_catalog
 
     bench = commands.add_parser("bench", help="run a suite: scenarios x trackers x seeds x sweeps, resumable")

@@ -16,7 +16,7 @@ from .arguments import int_at_least, scenario_arguments
 
 def register_generate(commands) -> None:
     """``simrig generate``'s options."""
-    from simrig.benchmark.engine_names import ENGINES
+    from simrig.engine_names import ENGINES
     from simrig.scenarios import MAX_SEQUENCES, space_catalog
 
     gen = commands.add_parser("generate", help="generate a dataset from a scenario, or a collection from a space")

@@ -11,7 +11,7 @@ from .arguments import int_at_least, tracker_param, tracker_params
 
 def register_search(commands) -> None:
     """``simrig search``'s options."""
-    from simrig.benchmark.engine_names import ENGINES
+    from simrig.engine_names import ENGINES
 
     search = commands.add_parser("search", help="look for a tracker's worst case, shrink it, write a regression test")
     search.add_argument("space", help="catalog search space (e.g. occlusion_gaps) or a search space .toml file")

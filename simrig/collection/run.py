@@ -25,11 +25,11 @@ from simrig.scenarios import ScenarioError
 from simrig.scenarios.search_schema import MAX_SEQUENCES
 from simrig.scenarios.space_file import SpaceError
 
-from ..benchmark.engine_names import ENGINES
-from ..benchmark.engines import Interrupted, local_map, machine_workers, ray_map, require_ray
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import check_no_links, check_output_path, check_own_folder, folder_lock, write_table_atomic
+from ..engine_names import ENGINES
 from ..pipeline.generate import check_generable
+from ..pools import Interrupted, map_on, require_ray
 from ..reading import read_capped
 from ..version import __version__
 from .index import index_table
@@ -152,9 +152,7 @@ def _check_same_collection(out: Path, description: dict) -> None:
 def _make(tasks: list[SequenceTask], out: Path, engine: str, workers: int | None, address: str | None,
           progress: bool, name: str) -> tuple[list[dict], int]:
     """Every task's index row, made on ``engine``; how many were finished earlier."""
-    workers = min(workers or machine_workers(), len(tasks))
-    results = local_map(make_sequence, tasks, workers) if engine == "local" else ray_map(make_sequence, tasks,
-                                                                                         workers, address)
+    results = map_on(engine, make_sequence, tasks, workers, address)
     rows, kept = [], 0
     bar = tqdm(total=len(tasks), unit="seq", disable=not progress, desc=f"collection {name}")
     with bar:

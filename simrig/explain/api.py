@@ -41,7 +41,8 @@ from simrig.scoring.planner import PLANNER_METRICS
 from simrig.scoring.results import METRICS_2D, METRICS_3D
 from simrig.sensor.groups import all_groups, present_groups
 
-from ..benchmark.engines import local_map, machine_workers, ray_map
+from ..engine_names import ENGINES
+from ..pools import map_on
 from .coalition import CoalitionResult, CoalitionTask, TrackerRun, evaluate_coalition
 from .shapley import Coalition, all_coalitions, coalition_order, exact_shares, prefixes, sample_orders, sampled_shares
 from .waterfall import waterfall
@@ -334,14 +335,9 @@ def run_tasks(tasks: list[CoalitionTask], engine: str, workers: int | None, addr
     ``progress``: a bar on stderr."""
     from tqdm import tqdm
 
-    if engine not in ("local", "ray"):
+    if engine not in ENGINES:
         raise ExplainError(f"--engine {engine!r}: choose local or ray")
-    if engine == "ray":
-        finished = ray_map(evaluate_coalition, tasks, workers, address)
-    else:
-        workers = min(workers or machine_workers(), len(tasks))
-        finished = (((task, evaluate_coalition(task)) for task in tasks) if workers <= 1
-                    else local_map(evaluate_coalition, tasks, workers))
+    finished = map_on(engine, evaluate_coalition, tasks, workers, address, inline_one=True)
     return list(tqdm(finished, total=len(tasks), desc="explain", unit="run", disable=not progress))
 
 

@@ -22,10 +22,10 @@ from pathlib import Path
 
 import numpy as np
 
-from simrig.benchmark.engine_names import ENGINES
-from simrig.benchmark.engines import RayExecutor, process_pool, stop_workers
 from simrig.benchmark.evaluate import METRIC_COLUMNS
+from simrig.engine_names import ENGINES
 from simrig.names import path_part
+from simrig.pools import RayExecutor, process_pool, stop_workers
 from simrig.reading import read_capped
 
 from ..dataset.manifest import write_json_atomic
