@@ -153,9 +153,8 @@ def _scene_samples(tables: Tables, scene: dict) -> list[dict]:
     return samples
 
 
-def read_nuscenes_truth(src: Path) -> ImportedTruth:
-    """The ground truth of the nuScenes tables at ``src`` (see the module docstring)."""
-    tables = Tables(table_folder(src))
+def _lidar_key_frames(tables: Tables) -> dict[str, dict]:
+    """Each sample's ``LIDAR_TOP`` key-frame ``sample_data`` record (where its ego pose is), by sample token."""
     lidar = {}
     for record in tables.rows["sample_data"].values():
         if not record.get("is_key_frame"):
@@ -166,6 +165,11 @@ def read_nuscenes_truth(src: Path) -> ImportedTruth:
                             referrer=("calibrated_sensor", sensor_calibration["token"], "sensor_token"))
         if sensor.get("channel") == "LIDAR_TOP":
             lidar[record["sample_token"]] = record
+    return lidar
+
+
+def _annotations_by_sample(tables: Tables) -> dict[str, list[dict]]:
+    """The ``sample_annotation`` records by sample token; one naming an unknown sample is refused."""
     annotations: dict[str, list[dict]] = {}
     for record in tables.rows["sample_annotation"].values():
         if record.get("sample_token") not in tables.rows["sample"]:
@@ -173,6 +177,74 @@ def read_nuscenes_truth(src: Path) -> ImportedTruth:
                               f"{tables.line('sample_annotation', record['token'])}: unknown sample token "
                               f"{record.get('sample_token')!r} (not in sample.json)")
         annotations.setdefault(record["sample_token"], []).append(record)
+    return annotations
+
+
+def _scene_times(tables: Tables, samples: list[dict], start: float) -> list[float]:
+    """[s] each sample's time on simrig's clock, the scene starting at ``start``; a timestamp that is no integer
+    number of microseconds is refused."""
+    bad = next((s for s in samples if isinstance(s.get("timestamp"), bool)
+                or not isinstance(s.get("timestamp"), int)), None)
+    if bad is not None:
+        raise SourceError(f"{tables.folder / 'sample.json'}: sample {bad['token']!r}: timestamp "
+                          f"{bad.get('timestamp')!r} is not an integer number of microseconds")
+    first_time = samples[0]["timestamp"]
+    return [start + 1e-6 * (s["timestamp"] - first_time) for s in samples]
+
+
+def _scene_egos(tables: Tables, samples: list[dict], lidar: dict[str, dict], times: list[float]) -> np.ndarray:
+    """``(S, 6)`` the ego pose of each sample [x, y, z, yaw] from its ``LIDAR_TOP`` key frame, with the world-frame
+    velocity [m/s] differentiated over the scene's times."""
+    poses = []
+    for sample in samples:
+        if sample["token"] not in lidar:
+            raise SourceError(f"{tables.folder / 'sample.json'}:{tables.line('sample', sample['token'])}: sample "
+                              f"{sample['token']!r} has no LIDAR_TOP key-frame sample_data (its ego pose)")
+        pose = tables.get("ego_pose", lidar[sample["token"]]["ego_pose_token"],
+                          referrer=("sample_data", lidar[sample["token"]]["token"], "ego_pose_token"))
+        poses.append([*pose["translation"][:3], _yaw(pose["rotation"])])
+    poses = np.array(poses, dtype=float).reshape(-1, 4)
+    velocity = (np.gradient(poses[:, :2], np.array(times), axis=0) if len(samples) > 1
+                else np.zeros((len(samples), 2)))
+    return np.hstack([poses, velocity])
+
+
+def _annotation_row(tables: Tables, annotation: dict, frame: int, instances: dict[str, int],
+                    left_out: dict[str, int]) -> tuple | None:
+    """(frame, actor, class, x, y, z, length, width, height, yaw, vx, vy) of one annotation, or ``None`` (counted
+    in ``left_out``) for a box of another category, a trailer or one with no lidar or radar point."""
+    instance = tables.get("instance", annotation["instance_token"],
+                          referrer=("sample_annotation", annotation["token"], "instance_token"))
+    category = tables.get("category", instance["category_token"],
+                          referrer=("instance", instance["token"], "category_token"))
+    name = TRACKING_NAME.get(category.get("name"))
+    if name is None:
+        left_out["other_categories"] += 1
+        return None
+    if name == "trailer":
+        left_out["trailer"] += 1
+        return None
+    if annotation.get("num_lidar_pts", 0) + annotation.get("num_radar_pts", 0) == 0:
+        left_out["no_points"] += 1
+        return None
+    actor = instances.setdefault(annotation["instance_token"], len(instances))
+    try:
+        x, y, z = (float(v) for v in annotation["translation"])
+        width, length, height = (float(v) for v in annotation["size"])
+        yaw = _yaw(annotation["rotation"])
+    except (KeyError, TypeError, ValueError) as error:
+        raise SourceError(f"{tables.folder / 'sample_annotation.json'}:"
+                          f"{tables.line('sample_annotation', annotation['token'])}: annotation "
+                          f"{annotation['token']!r}: {error} (translation 3, size 3, rotation 4 numbers)") from None
+    exact = annotation.get("velocity")  # simrig's export writes the exact one
+    return (frame, actor, name, x, y, z, length, width, height, yaw,
+            *(_velocity(tables, annotation) if exact is None else map(float, exact[:2])))
+
+
+def read_nuscenes_truth(src: Path) -> ImportedTruth:
+    """The ground truth of the nuScenes tables at ``src`` (see the module docstring)."""
+    tables = Tables(table_folder(src))
+    lidar, annotations = _lidar_key_frames(tables), _annotations_by_sample(tables)
     tokens, scenes, timestamps, poses = [], [], [], []
     rows: list[tuple] = []
     instances: dict[str, int] = {}
@@ -182,58 +254,18 @@ def read_nuscenes_truth(src: Path) -> ImportedTruth:
         samples = _scene_samples(tables, scene)
         scenes.append({"name": scene.get("name", scene["token"]), "token": scene["token"],
                        "first_frame": len(tokens), "frames": len(samples)})
-        bad = next((s for s in samples if isinstance(s.get("timestamp"), bool)
-                    or not isinstance(s.get("timestamp"), int)), None)
-        if bad is not None:
-            raise SourceError(f"{tables.folder / 'sample.json'}: sample {bad['token']!r}: timestamp "
-                              f"{bad.get('timestamp')!r} is not an integer number of microseconds")
-        first_time = samples[0]["timestamp"]
-        scene_times = [start + 1e-6 * (s["timestamp"] - first_time) for s in samples]
+        scene_times = _scene_times(tables, samples, start)
         start = scene_times[-1] + SCENE_GAP_S
-        scene_poses = []
-        for sample in samples:
-            if sample["token"] not in lidar:
-                raise SourceError(f"{tables.folder / 'sample.json'}:{tables.line('sample', sample['token'])}: sample "
-                                  f"{sample['token']!r} has no LIDAR_TOP key-frame sample_data (its ego pose)")
-            pose = tables.get("ego_pose", lidar[sample["token"]]["ego_pose_token"],
-                              referrer=("sample_data", lidar[sample["token"]]["token"], "ego_pose_token"))
-            scene_poses.append([*pose["translation"][:3], _yaw(pose["rotation"])])
-        scene_poses = np.array(scene_poses, dtype=float).reshape(-1, 4)
-        ego_velocity = (np.gradient(scene_poses[:, :2], np.array(scene_times), axis=0) if len(samples) > 1
-                        else np.zeros((len(samples), 2)))
+        egos = _scene_egos(tables, samples, lidar, scene_times)
         for k, sample in enumerate(samples):
             frame = len(tokens)
             tokens.append(sample["token"])
             timestamps.append(scene_times[k])
-            poses.append([*scene_poses[k], *ego_velocity[k]])
+            poses.append(list(egos[k]))
             for annotation in annotations.get(sample["token"], []):
-                instance = tables.get("instance", annotation["instance_token"],
-                                      referrer=("sample_annotation", annotation["token"], "instance_token"))
-                category = tables.get("category", instance["category_token"],
-                                      referrer=("instance", instance["token"], "category_token"))
-                name = TRACKING_NAME.get(category.get("name"))
-                if name is None:
-                    left_out["other_categories"] += 1
-                    continue
-                if name == "trailer":
-                    left_out["trailer"] += 1
-                    continue
-                if annotation.get("num_lidar_pts", 0) + annotation.get("num_radar_pts", 0) == 0:
-                    left_out["no_points"] += 1
-                    continue
-                actor = instances.setdefault(annotation["instance_token"], len(instances))
-                try:
-                    x, y, z = (float(v) for v in annotation["translation"])
-                    width, length, height = (float(v) for v in annotation["size"])
-                    yaw = _yaw(annotation["rotation"])
-                except (KeyError, TypeError, ValueError) as error:
-                    raise SourceError(f"{tables.folder / 'sample_annotation.json'}:"
-                                      f"{tables.line('sample_annotation', annotation['token'])}: annotation "
-                                      f"{annotation['token']!r}: {error} (translation 3, size 3, rotation 4 "
-                                      "numbers)") from None
-                exact = annotation.get("velocity")  # simrig's export writes the exact one
-                rows.append((frame, actor, name, x, y, z, length, width, height, yaw,
-                             *(_velocity(tables, annotation) if exact is None else map(float, exact[:2]))))
+                row = _annotation_row(tables, annotation, frame, instances, left_out)
+                if row is not None:
+                    rows.append(row)
     if not tokens:
         raise SourceError(f"{tables.folder / 'scene.json'}: holds no scene")
     rows.sort(key=lambda r: (r[0], r[1]))
