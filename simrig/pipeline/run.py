@@ -124,31 +124,8 @@ def run_pipeline(
         if camera not in cameras:
             raise TrackingError(f"--camera {camera!r}: scenario {loaded.name!r}'s rig has cameras "
                                 f"{', '.join(cameras)}")
-    frame_count = loaded.frames if frames is None else frames
     folder = out / DATASET_DIR
-    matches = _matching_dataset(folder, loaded, seed, frame_count)
-    if matches and images and Dataset.open(folder).image_folder is None:
-        matches = False  # the same world, but without the images this run asks for
-    reused = bool(matches) and not overwrite
-    generation_s = None
-    if not reused:
-        if matches is False and not overwrite:
-            manifest = read_manifest(folder)  # a damaged one raises its own one-line error here
-            raise DatasetExistsError(
-                f"{str(folder)!r} holds a dataset of another scenario, seed or frame count, or without images "
-                f"({manifest['scenario']['name']}, seed {manifest['seed']}, {manifest['frames']} frames"
-                f"{', no images' if images else ''}); "
-                "pass --overwrite to replace it or choose another --out")
-        started = time.perf_counter()
-        existed = out.exists()
-        try:
-            generate(loaded, seed=seed, out=folder, frames=frames, overwrite=overwrite, progress=progress,
-                     images=images)
-        except BaseException:
-            if not existed and out.is_dir() and not any(out.iterdir()):  # a run folder this call made, still empty
-                out.rmdir()
-            raise
-        generation_s = time.perf_counter() - started
+    reused, generation_s = _dataset_for(loaded, seed, out, frames, overwrite, progress, images)
     dataset = Dataset.open(folder)
     reference = tracker if isinstance(tracker, str) else tracker_reference(tracker)
     label = run_label(reference or tracker_display(tracker), params, camera)
@@ -156,7 +133,49 @@ def run_pipeline(
     _record_tracker(tracking.out, tracker, params, camera)
     report = score(dataset, tracking.tracks, camera=camera)  # scored in memory; the folder is for the user
     report = dataclasses.replace(report, dataset=DATASET_DIR, tracks=f"{TRACKS_DIR}/{label}")  # relative to out
+    command = command_line(scenario, seed, reference or tracker_display(tracker), params, frames, camera, images)
     scores = out / SCORES_DIR / label
+    written = _write_scores(report, scores, f"## {loaded.name}, seed {seed}, tracker {tracker}", command)
+    write_json_atomic(scores / "timings.json", {
+        "generation_s": generation_s, "dataset_reused": reused, "frames": tracking.frames,
+        "step_s": tracking.step_seconds, "step_frames_per_second": tracking.frames_per_second})
+    index = write_index(out)
+    return PipelineResult(report, tracking, (folder, tracking.out, *written, index), loaded, folder, reused, label)
+
+
+def _dataset_for(loaded: Scenario, seed: int, out: Path, frames: int | None, overwrite: bool, progress: bool,
+                 images: bool) -> tuple[bool, float | None]:
+    """Make ``out/dataset`` hold ``loaded`` at ``seed``: (whether a matching complete dataset was reused, the
+    generation's seconds or ``None``). One of another scenario, seed or frame count, or without the ``images``
+    asked for, is replaced only with ``overwrite``; a run folder this call made is removed again if generation
+    fails before writing into it."""
+    folder = out / DATASET_DIR
+    matches = _matching_dataset(folder, loaded, seed, loaded.frames if frames is None else frames)
+    if matches and images and Dataset.open(folder).image_folder is None:
+        matches = False  # the same world, but without the images this run asks for
+    if matches and not overwrite:
+        return True, None
+    if matches is False and not overwrite:
+        manifest = read_manifest(folder)  # a damaged one raises its own one-line error here
+        raise DatasetExistsError(
+            f"{str(folder)!r} holds a dataset of another scenario, seed or frame count, or without images "
+            f"({manifest['scenario']['name']}, seed {manifest['seed']}, {manifest['frames']} frames"
+            f"{', no images' if images else ''}); "
+            "pass --overwrite to replace it or choose another --out")
+    started = time.perf_counter()
+    existed = out.exists()
+    try:
+        generate(loaded, seed=seed, out=folder, frames=frames, overwrite=overwrite, progress=progress, images=images)
+    except BaseException:
+        if not existed and out.is_dir() and not any(out.iterdir()):  # a run folder this call made, still empty
+            out.rmdir()
+        raise
+    return False, time.perf_counter() - started
+
+
+def _write_scores(report, scores: Path, heading: str, command: str) -> tuple[Path, ...]:
+    """``score.json``, ``errors.parquet``, ``plan.parquet`` (when the report has a plan; an earlier run's is
+    removed otherwise) and ``report.md`` in ``scores``, each atomically; the paths written, in that order."""
     scores.mkdir(parents=True, exist_ok=True)
     json_path, errors_path, markdown = scores / "score.json", scores / "errors.parquet", scores / REPORT
     write_text_atomic(json_path, json.dumps(report.to_dict(), indent=2) + "\n")
@@ -167,16 +186,9 @@ def run_pipeline(
         report.write_plan(plan_path)
     elif plan_path.is_file():  # an earlier run's plan, of a tracker run that now has none
         plan_path.unlink()
-    command = command_line(scenario, seed, reference or tracker_display(tracker), params, frames, camera, images)
-    write_text_atomic(markdown, f"## {loaded.name}, seed {seed}, tracker {tracker}\n\n"
-                                 f"Produced by `{command}`.\n\n```\n{report.table()}\n```\n")
-    write_json_atomic(scores / "timings.json", {
-        "generation_s": generation_s, "dataset_reused": reused, "frames": tracking.frames,
-        "step_s": tracking.step_seconds, "step_frames_per_second": tracking.frames_per_second})
-    index = write_index(out)
+    write_text_atomic(markdown, f"{heading}\n\nProduced by `{command}`.\n\n```\n{report.table()}\n```\n")
     planned = (plan_path,) if report.plan is not None else ()
-    return PipelineResult(report, tracking, (folder, tracking.out, json_path, errors_path, *planned, markdown, index),
-                          loaded, folder, reused, label)
+    return (json_path, errors_path, *planned, markdown)
 
 
 def _record_tracker(folder: Path, tracker, params: dict | None, camera: str | None) -> None:
