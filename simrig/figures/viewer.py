@@ -117,7 +117,37 @@ def log_run(folder: Path | str, *, tracker: str | None = None, save: Path | str 
             raise ViewerError(f"{save_option} {str(save)!r} is a symbolic link; simrig does not write through links")
     dataset = Dataset.open(dataset_path)
     truth = dataset.ground_truth
-    rig = truth.rig
+    recording = _recording(rr, dataset, save, spawn, save_option)
+    images = dataset.path / "images"
+    for camera in truth.rig.cameras:
+        if not images.is_dir():
+            recording.log(f"cameras/{camera.name}/frame", rr.Boxes2D(array=[[0, 0, camera.width, camera.height]],
+                          array_format=rr.Box2DFormat.XYXY, colors=[[128, 128, 128]], labels=[camera.name]),
+                          static=True)
+    rows3d = rows2d = None
+    if tracks_path is not None:
+        from simrig.formats.tracks import dataset_tracks
+
+        rows3d, rows2d = dataset_tracks(dataset, tracks_path)
+    det, det_owner = _detections_with_owners(dataset)
+    for position, frame in enumerate(truth.frames):
+        recording.set_time("frame", sequence=int(frame))
+        recording.set_time("time", duration=float(truth.timestamps[position]))
+        g = np.nonzero(truth.frame == frame)[0]
+        d = np.nonzero(det["frame"] == frame)[0]
+        _log_world(rr, recording, truth, position, g, det, det_owner[d], d, rows3d)
+        _log_cameras(rr, recording, truth, frame, g, det, det_owner, d, rows2d, images)
+    if errors_path is not None:
+        _log_errors(rr, recording, errors_path, dict(zip(truth.frames.tolist(), truth.timestamps.tolist(),
+                                                         strict=True)))
+    recording.flush()
+    if save is not None:
+        recording.disconnect()
+    return Path(save) if save is not None else None
+
+
+def _recording(rr, dataset: Dataset, save: Path | str | None, spawn: bool, save_option: str):
+    """A rerun recording of ``dataset``, streaming into the file ``save`` or to a viewer spawned now (``spawn``)."""
     recording = rr.RecordingStream(application_id="simrig", recording_id=f"{dataset.scenario['name']}-"
                                                                          f"seed{dataset.seed}")
     if save is not None:
@@ -128,17 +158,11 @@ def log_run(folder: Path | str, *, tracker: str | None = None, save: Path | str 
             raise ViewerError(f"{save_option} {str(save)!r}: cannot write the recording there ({error})") from None
     elif spawn:
         recording.spawn()
-    images = dataset.path / "images"
-    for camera in rig.cameras:
-        if not images.is_dir():
-            recording.log(f"cameras/{camera.name}/frame", rr.Boxes2D(array=[[0, 0, camera.width, camera.height]],
-                          array_format=rr.Box2DFormat.XYXY, colors=[[128, 128, 128]], labels=[camera.name]),
-                          static=True)
-    rows3d = rows2d = None
-    if tracks_path is not None:
-        from simrig.formats.tracks import dataset_tracks
+    return recording
 
-        rows3d, rows2d = dataset_tracks(dataset, tracks_path)
+
+def _detections_with_owners(dataset: Dataset) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The detections' columns the viewer draws, and each detection's actor (−1: clutter)."""
     detections = dataset.table("detections")
     sensor_truth = dataset.table("sensor_truth")
     owner_of = {(r["camera"], r["frame"], r["detection"]): r["actor_id"]
@@ -147,50 +171,52 @@ def log_run(folder: Path | str, *, tracker: str | None = None, save: Path | str 
     det = {name: detections.column(name).to_numpy(zero_copy_only=False) for name in detections.column_names
            if name in ("frame", "camera", "index", "x1", "y1", "x2", "y2", "x", "y", "z", "length", "width",
                        "height", "yaw")}
-    det_owner = np.array([owner_of.get((c, int(f), int(i)), -1) for c, f, i in
-                          zip(det["camera"], det["frame"], det["index"], strict=True)], dtype=np.int64)
-    for position, frame in enumerate(truth.frames):
-        recording.set_time("frame", sequence=int(frame))
-        recording.set_time("time", duration=float(truth.timestamps[position]))
-        ego = truth.egos[position]
-        recording.log("world/ego", _boxes3d(rr, np.array([[ego.x, ego.y, ego.z + 0.75, 4.6, 1.9, 1.5, ego.yaw]]),
-                                            np.array([[0, 0, 0]], dtype=np.uint8), ["ego"]))
-        g = np.nonzero(truth.frame == frame)[0]
-        recording.log("world/ground_truth", _boxes3d(rr, truth.boxes[g], _colours(truth.actor_id[g], identity_colour),
-                                                     [str(a) for a in truth.actor_id[g]]))
-        d = np.nonzero(det["frame"] == frame)[0]
-        det_colours = np.array([CLUTTER_COLOUR if o < 0 else identity_colour(o) for o in det_owner[d]]).reshape(-1, 3)
-        det_colours = (det_colours * 255).astype(np.uint8)
-        det_boxes3d = np.column_stack([det[k][d] for k in ("x", "y", "z", "length", "width", "height", "yaw")])
-        recording.log("world/detections", _boxes3d(rr, det_boxes3d, det_colours, [""] * len(d)))
-        if rows3d is not None:
-            t = np.nonzero(rows3d.frame == frame)[0]
-            recording.log("world/tracks", _boxes3d(rr, rows3d.boxes[t], _colours(rows3d.track_id[t], track_colour),
-                                                   [f"T{i}" for i in rows3d.track_id[t]]))
-        for c, camera in enumerate(rig.camera_names):
-            if images.is_dir():
-                recording.log(f"cameras/{camera}/image", rr.EncodedImage(path=images / camera / f"{frame:06d}.png"))
-            seen = g[truth.in_view[g, c]]
-            recording.log(f"cameras/{camera}/ground_truth", _boxes2d(
-                rr, truth.boxes2d_in(seen, c), _colours(truth.actor_id[seen], identity_colour),
-                [str(a) for a in truth.actor_id[seen]]))
-            k = d[det["camera"][d] == camera]
-            k_colours = np.array([CLUTTER_COLOUR if o < 0 else identity_colour(o) for o in det_owner[k]]).reshape(-1, 3)
-            recording.log(f"cameras/{camera}/detections", _boxes2d(
-                rr, np.column_stack([det[n][k] for n in ("x1", "y1", "x2", "y2")]),
-                (k_colours * 255).astype(np.uint8), [""] * len(k)))
-            if rows2d is not None:
-                t = np.nonzero((rows2d.frame == frame) & (rows2d.camera == camera))[0]
-                recording.log(f"cameras/{camera}/tracks", _boxes2d(
-                    rr, rows2d.boxes[t], _colours(rows2d.track_id[t], track_colour),
-                    [f"T{i}" for i in rows2d.track_id[t]]))
-    if errors_path is not None:
-        _log_errors(rr, recording, errors_path, dict(zip(truth.frames.tolist(), truth.timestamps.tolist(),
-                                                         strict=True)))
-    recording.flush()
-    if save is not None:
-        recording.disconnect()
-    return Path(save) if save is not None else None
+    owner = np.array([owner_of.get((c, int(f), int(i)), -1) for c, f, i in
+                      zip(det["camera"], det["frame"], det["index"], strict=True)], dtype=np.int64)
+    return det, owner
+
+
+def _detection_colours(owners: np.ndarray) -> np.ndarray:
+    """``(N, 3)`` uint8 colours: an actor's identity colour, clutter's own."""
+    colours = np.array([CLUTTER_COLOUR if o < 0 else identity_colour(o) for o in owners]).reshape(-1, 3)
+    return (colours * 255).astype(np.uint8)
+
+
+def _log_world(rr, recording, truth, position: int, g: np.ndarray, det: dict, owners: np.ndarray, d: np.ndarray,
+               rows3d) -> None:
+    """One frame's 3D view: the ego, the ground truth (rows ``g``), the detections (rows ``d``) and the 3D tracks."""
+    ego = truth.egos[position]
+    recording.log("world/ego", _boxes3d(rr, np.array([[ego.x, ego.y, ego.z + 0.75, 4.6, 1.9, 1.5, ego.yaw]]),
+                                        np.array([[0, 0, 0]], dtype=np.uint8), ["ego"]))
+    recording.log("world/ground_truth", _boxes3d(rr, truth.boxes[g], _colours(truth.actor_id[g], identity_colour),
+                                                 [str(a) for a in truth.actor_id[g]]))
+    det_boxes3d = np.column_stack([det[k][d] for k in ("x", "y", "z", "length", "width", "height", "yaw")])
+    recording.log("world/detections", _boxes3d(rr, det_boxes3d, _detection_colours(owners), [""] * len(d)))
+    if rows3d is not None:
+        t = np.nonzero(rows3d.frame == truth.frames[position])[0]
+        recording.log("world/tracks", _boxes3d(rr, rows3d.boxes[t], _colours(rows3d.track_id[t], track_colour),
+                                               [f"T{i}" for i in rows3d.track_id[t]]))
+
+
+def _log_cameras(rr, recording, truth, frame: int, g: np.ndarray, det: dict, det_owner: np.ndarray, d: np.ndarray,
+                 rows2d, images: Path) -> None:
+    """One frame in every camera: its image (when the dataset has them), ground truth, detections and 2D tracks."""
+    for c, camera in enumerate(truth.rig.camera_names):
+        if images.is_dir():
+            recording.log(f"cameras/{camera}/image", rr.EncodedImage(path=images / camera / f"{frame:06d}.png"))
+        seen = g[truth.in_view[g, c]]
+        recording.log(f"cameras/{camera}/ground_truth", _boxes2d(
+            rr, truth.boxes2d_in(seen, c), _colours(truth.actor_id[seen], identity_colour),
+            [str(a) for a in truth.actor_id[seen]]))
+        k = d[det["camera"][d] == camera]
+        recording.log(f"cameras/{camera}/detections", _boxes2d(
+            rr, np.column_stack([det[n][k] for n in ("x1", "y1", "x2", "y2")]), _detection_colours(det_owner[k]),
+            [""] * len(k)))
+        if rows2d is not None:
+            t = np.nonzero((rows2d.frame == frame) & (rows2d.camera == camera))[0]
+            recording.log(f"cameras/{camera}/tracks", _boxes2d(
+                rr, rows2d.boxes[t], _colours(rows2d.track_id[t], track_colour),
+                [f"T{i}" for i in rows2d.track_id[t]]))
 
 
 def event_text(error: dict) -> str:
