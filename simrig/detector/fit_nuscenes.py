@@ -103,6 +103,34 @@ def _in_range(boxes: np.ndarray, frame: np.ndarray, label: np.ndarray, ego: np.n
     return distance < limit
 
 
+def _matched_rows(log, gt_keep: np.ndarray, det_keep: np.ndarray, det_frame: np.ndarray, det_label: np.ndarray,
+                  det_score: np.ndarray, det_boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(ground-truth rows, detection rows) of the pairs the devkit's matching makes, class by class (greedy by
+    score, BEV centre distance below the TP threshold, same sample), among the rows kept."""
+    gt_rows, det_rows = [], []
+    for name in (c.value for c in ActorClass):
+        g = np.nonzero(gt_keep & (log.label == name))[0]
+        p = np.nonzero(det_keep & (det_label == name))[0]
+        if not len(g) or not len(p):
+            continue
+        matched = match_class(log.frame[g], log.boxes[g], det_frame[p], det_boxes[p], det_score[p],
+                              TP_THRESHOLD).matched_gt
+        gt_rows.append(g[matched[matched >= 0]])
+        det_rows.append(p[matched >= 0])
+    gt_row = np.concatenate(gt_rows) if gt_rows else np.zeros(0, dtype=np.int64)
+    det_row = np.concatenate(det_rows) if det_rows else np.zeros(0, dtype=np.int64)
+    return gt_row, det_row
+
+
+def _clutter(false: int, samples: int, cameras: int) -> tuple[float, str]:
+    """(clutter rate per camera and frame, its note) of ``false`` unmatched in-range detections in ``samples``."""
+    note = (f"clutter.rate_per_frame: {false} unmatched in-range detections over {samples} samples = "
+            f"{false / samples:.3f} per sample, divided by --cameras {cameras} (the log's boxes are per "
+            "sample, simrig's clutter per camera and frame); clutter, ghosts, duplicates, class confusions and "
+            "every low-score box in the JSON all count (threshold the JSON first if your tracker does)")
+    return false / (samples * cameras), note
+
+
 def fit_nuscenes(detections: Path, truth: Path, cameras: int = NUSCENES_CAMERAS) -> Fit:
     """Fit the detector model of the detection-results JSON ``detections`` against the ground truth at
     ``truth`` (see the module docstring); ``cameras`` divides the per-sample clutter rate."""
@@ -120,18 +148,7 @@ def fit_nuscenes(detections: Path, truth: Path, cameras: int = NUSCENES_CAMERAS)
     det_keep = _in_range(det_boxes, det_frame, det_label, log.ego)
     gt_keep = np.isin(log.frame, samples) & _in_range(log.boxes, log.frame, log.label, log.ego)
 
-    gt_rows, det_rows = [], []
-    for name in (c.value for c in ActorClass):
-        g = np.nonzero(gt_keep & (log.label == name))[0]
-        p = np.nonzero(det_keep & (det_label == name))[0]
-        if not len(g) or not len(p):
-            continue
-        matched = match_class(log.frame[g], log.boxes[g], det_frame[p], det_boxes[p], det_score[p],
-                              TP_THRESHOLD).matched_gt
-        gt_rows.append(g[matched[matched >= 0]])
-        det_rows.append(p[matched >= 0])
-    gt_row = np.concatenate(gt_rows) if gt_rows else np.zeros(0, dtype=np.int64)
-    det_row = np.concatenate(det_rows) if det_rows else np.zeros(0, dtype=np.int64)
+    gt_row, det_row = _matched_rows(log, gt_keep, det_keep, det_frame, det_label, det_score, det_boxes)
     if len(gt_row) < MIN_MATCHES:
         raise SimrigError(f"{detections}: only {len(gt_row)} detections match ground truth in {truth} (BEV centre "
                           f"< {TP_THRESHOLD:g} m, same class, same sample); too few to fit a detector")
@@ -173,12 +190,8 @@ def fit_nuscenes(detections: Path, truth: Path, cameras: int = NUSCENES_CAMERAS)
                  "gain (the visible-fraction × (1 − truncation) term) not fitted: the log has neither, so gain = 0 "
                  "and base is the fitted intercept; error_scale_m and distance_scale_m fixed by the fit's design")
 
-    false = int(det_keep.sum()) - len(det_row)
-    clutter_rate = false / (len(samples) * cameras)
-    notes.append(f"clutter.rate_per_frame: {false} unmatched in-range detections over {len(samples)} samples = "
-                 f"{false / len(samples):.3f} per sample, divided by --cameras {cameras} (the log's boxes are per "
-                 "sample, simrig's clutter per camera and frame); clutter, ghosts, duplicates, class confusions and "
-                 "every low-score box in the JSON all count (threshold the JSON first if your tracker does)")
+    clutter_rate, clutter_note = _clutter(int(det_keep.sum()) - len(det_row), len(samples), cameras)
+    notes.append(clutter_note)
     notes.append("not fitted (defaults): box2d (no image boxes), embedding (no features), ghosts, duplicates and "
                  "confusion (not separable from clutter by matching per class), clutter score/size/depth ranges")
     sensor = {"detection": detection, "box3d": {k: round(float(v), 6) for k, v in box3d.items()},
