@@ -56,14 +56,9 @@ def check_explain_seeds(seeds, known, of: str) -> None:
                            f"{', '.join(map(str, sorted(known)))})")
 
 
-def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[str] | None = None,
-                  seeds: list[int] | None = None, engine: str = "local", workers: int | None = None,
-                  address: str | None = None, progress: bool = False) -> Path:
-    """Explain every tracker on every base cell of the finished bench folder ``out`` (only those of ``seeds``
-    when given: each cell costs about 2k+2 counterfactual sensor runs and as many runs of every tracker);
-    writes and returns ``out/explain.parquet``. Counterfactual datasets are cached in
-    ``out/explain-cache/CELL``."""
-    out = Path(out)
+def _finished_bench(out: Path) -> dict:
+    """``bench.json`` of the finished open-loop bench in ``out``; an :class:`ExplainError` saying why not
+    otherwise."""
     try:
         description = read_json(out / BENCH_FILE, BENCH_FILE, ValueError)
     except (OSError, ValueError) as error:
@@ -73,6 +68,38 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
     if description["suite_settings"].get("closed_loop"):
         raise ExplainError(f"{out}: the bench drove closed loop (closed_loop = true); explain reruns the sensor on a "
                            "fixed world, and a drive's world changes with every cause removed")
+    return description
+
+
+def _share_rows(games: list[tuple], outcomes: list[dict], skipped: list[tuple]) -> list[dict]:
+    """The ``explain.parquet`` rows of every settled game (one per metric and cause); a game whose tracker failed
+    on one of its counterfactuals is added to ``skipped`` instead (the others stay explained)."""
+    rows = []
+    for (scenario_name, seed, cell, tracker, chosen, plan), outcome in zip(games, outcomes, strict=True):
+        failed = failed_coalition(outcome)
+        if failed is not None:
+            skipped.append((tracker, cell, failed))
+            continue
+        game = settle(plan, outcome)
+        mode = "exact" if game.exact else "sampled"
+        for metric, values in game.metrics(chosen).items():
+            for cause, share in values["shares"].items():
+                rows.append({"scenario": scenario_name, "seed": seed, "cell": cell, "tracker": tracker,
+                             "metric": metric, "cause": cause, "share": share,
+                             "ci95": values.get("ci95", {}).get(cause), "actual": values["actual"],
+                             "perfect": values["perfect"], "mode": mode})
+    return rows
+
+
+def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[str] | None = None,
+                  seeds: list[int] | None = None, engine: str = "local", workers: int | None = None,
+                  address: str | None = None, progress: bool = False) -> Path:
+    """Explain every tracker on every base cell of the finished bench folder ``out`` (only those of ``seeds``
+    when given: each cell costs about 2k+2 counterfactual sensor runs and as many runs of every tracker);
+    writes and returns ``out/explain.parquet``. Counterfactual datasets are cached in
+    ``out/explain-cache/CELL``."""
+    out = Path(out)
+    description = _finished_bench(out)
     entries = {TrackerEntry.model_validate(entry).name: entry for entry in description["suite_settings"]["trackers"]}
     limit = description["suite_settings"].get("frame_time_limit_s", FRAME_TIME_LIMIT_S)
     results = pq.read_table(out / RESULTS)
@@ -113,20 +140,7 @@ def explain_bench(out: Path | str, *, samples: int | None = None, metrics: list[
         coalition = frozenset(task.removed)
         for index, result in zip(members[(task.dataset, coalition)], results, strict=True):
             outcomes[index][coalition] = result
-    rows = []
-    for (scenario_name, seed, cell, tracker, chosen, plan), outcome in zip(games, outcomes, strict=True):
-        failed = failed_coalition(outcome)
-        if failed is not None:  # one tracker failing on one counterfactual leaves the others explained
-            skipped.append((tracker, cell, failed))
-            continue
-        game = settle(plan, outcome)
-        mode = "exact" if game.exact else "sampled"
-        for metric, values in game.metrics(chosen).items():
-            for cause, share in values["shares"].items():
-                rows.append({"scenario": scenario_name, "seed": seed, "cell": cell, "tracker": tracker,
-                             "metric": metric, "cause": cause, "share": share,
-                             "ci95": values.get("ci95", {}).get(cause), "actual": values["actual"],
-                             "perfect": values["perfect"], "mode": mode})
+    rows = _share_rows(games, outcomes, skipped)
     command = ["simrig", "bench", str(description["suite"]), "--out", str(out), "--explain"]
     command += ["--explain-samples", str(samples)] if samples is not None else []
     command += ["--explain-seeds", ",".join(map(str, seeds))] if seeds is not None else []
