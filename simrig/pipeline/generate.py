@@ -124,20 +124,8 @@ def generate(
     and the world key covers everything (the world then depends on the detector and the tracker too).
     """
     frames = scenario.frames if frames is None else frames
-    if not isinstance(frames, int) or frames < 1:
-        raise ValueError(f"frames: must be a positive integer, got {frames!r}")
-    too_late = latency_beyond(scenario, frames)  # checked for the scenario's own length; --frames may be shorter
-    if too_late:
-        raise ScenarioError(too_late)
     out = Path(out)
-    if world_from is not None and driver is not None:
-        raise ValueError("driver: a closed-loop drive simulates its own world; it cannot reuse one (world_from)")
-    if world_from is not None:
-        if images:
-            raise ValueError("images: cannot be written when the world is reused (world_from); generate in full")
-        if world_from.manifest.get("world_key") != world_key(scenario, seed, frames):
-            raise DatasetError(f"{world_from.path}: not the same world as {scenario.name!r} seed {seed}, "
-                               f"{frames} frames (traffic, rig, rendering or world perturbations differ)")
+    _check_request(scenario, seed, frames, images, world_from, driver)
     check_output_folder(out, overwrite=overwrite)
     streams = RandomStreams(seed)
     rig = build_rig(scenario.rig)
@@ -157,36 +145,60 @@ def generate(
                 state, projection, visibility = world.frame(frame, times)
                 refuse_crashes(scenario, seed, state)
                 events.extend({"frame": state.frame, "event": name} for name in state.events)
-                if frame == 0 and world.markings is not None:
-                    writer.write_json("road.json", world.markings.to_dict())
-
-                with times.stage("sensor"):
-                    output = sensor.observe(state, projection, visibility)
-
-                if images:
-                    with times.stage("images"):
-                        scene = world.scene
-                        scene.set_frame(state.ego, state.classes, state.boxes)
-                        for camera in rig.cameras:
-                            writer.write_image(
-                                f"{IMAGES_FOLDER}/{camera.name}/{frame:06d}.png", scene.colour(camera, rig, state.ego)
-                            )
-
-                with times.stage("writing"):
-                    columns = frame_columns(state, visibility, output, rig.camera_names)
-                with times.stage("planning"):
-                    columns["truth_plans"] = plans.row(state)
-                with times.stage("writing"):
-                    writer.write_frame(columns)
-                if driver is not None:
-                    with times.stage("driving"):
-                        world.traffic.perceive(*driver.decide(state, columns))
+                _write_frame(frame, state, projection, visibility, world, sensor, plans, writer, times,
+                             images=images, driver=driver)
             with times.stage("writing"):
                 manifest = writer.commit(_manifest_record(scenario, seed, frames, events, removed, driver))
     finally:
         world.close()
     times.total = time.perf_counter() - started
     return GenerateResult(path=out, manifest=manifest, times=times)
+
+
+def _check_request(scenario: Scenario, seed: int, frames, images: bool, world_from: Dataset | None,
+                   driver: Driver | None) -> None:
+    """Refuse, before any work, a frame count that is no positive integer, a detection latency beyond the
+    scenario's length, and a reused world that cannot be (with images, in a drive, or not the same world)."""
+    if not isinstance(frames, int) or frames < 1:
+        raise ValueError(f"frames: must be a positive integer, got {frames!r}")
+    too_late = latency_beyond(scenario, frames)  # checked for the scenario's own length; --frames may be shorter
+    if too_late:
+        raise ScenarioError(too_late)
+    if world_from is not None and driver is not None:
+        raise ValueError("driver: a closed-loop drive simulates its own world; it cannot reuse one (world_from)")
+    if world_from is not None:
+        if images:
+            raise ValueError("images: cannot be written when the world is reused (world_from); generate in full")
+        if world_from.manifest.get("world_key") != world_key(scenario, seed, frames):
+            raise DatasetError(f"{world_from.path}: not the same world as {scenario.name!r} seed {seed}, "
+                               f"{frames} frames (traffic, rig, rendering or world perturbations differ)")
+
+
+def _write_frame(frame: int, state, projection, visibility, world, sensor: SensorModel, plans, writer: DatasetWriter,
+                 times: StageTimes, *, images: bool, driver: Driver | None) -> None:
+    """One frame of the world (its state, projection and visibility) through the sensor, its images when asked
+    for, its rows with the ground-truth plan written, and a drive's perception handed back to the ego."""
+    rig = sensor.rig
+    if frame == 0 and world.markings is not None:
+        writer.write_json("road.json", world.markings.to_dict())
+    with times.stage("sensor"):
+        output = sensor.observe(state, projection, visibility)
+    if images:
+        with times.stage("images"):
+            scene = world.scene
+            scene.set_frame(state.ego, state.classes, state.boxes)
+            for camera in rig.cameras:
+                writer.write_image(f"{IMAGES_FOLDER}/{camera.name}/{frame:06d}.png",
+                                   scene.colour(camera, rig, state.ego))
+    with times.stage("writing"):
+        columns = frame_columns(state, visibility, output, rig.camera_names)
+    with times.stage("planning"):
+        columns["truth_plans"] = plans.row(state)
+    with times.stage("writing"):
+        writer.write_frame(columns)
+    if driver is not None:
+        with times.stage("driving"):
+            world.traffic.perceive(*driver.decide(state, columns))
 
 
 def _manifest_record(scenario: Scenario, seed: int, frames: int, events: list[dict], removed, driver) -> dict:
