@@ -343,3 +343,19 @@ def test_a_tracker_that_reports_nothing_in_the_whole_run_is_warned_about(small_d
     assert main(["track", str(small_dataset.path), "--tracker", "degraded", "--param", "latency_s=0.5",
                  "--out", str(tmp_path / "early")]) == 0
     assert "warning" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("edit", "said"), [
+    (lambda manifest: manifest.__setitem__("seed", 1), "scenario 'small' with seed 1 does not give its ego_poses"),
+    (lambda manifest: manifest["scenario"]["traffic"].update(vehicles=14),
+     "scenario 'small' with seed 0 does not give its"),
+])
+def test_info_verify_refuses_a_rehashed_manifest_whose_seed_or_scenario_did_not_make_the_dataset(
+        edit, said, small_dataset, tmp_path, capsys):
+    """A seed edited into the manifest and re-hashed passes every SHA-256; regenerating the opening frames from
+    what the manifest says shows it did not make the tables. The true manifest passes."""
+    assert main(["info", str(small_dataset.path), "--verify"]) == 0
+    assert "reproduced its scenario and seed regenerate its opening frames" in capsys.readouterr().out
+    copy = _rehashed(small_dataset, tmp_path, edit)
+    err = _error(capsys, ["info", str(copy), "--verify"])
+    assert said in err and "the manifest does not describe what made this dataset" in err

@@ -13,7 +13,9 @@ def register_info(commands) -> None:
     """``simrig info``'s options."""
     info = commands.add_parser("info", help="summarise a dataset folder")
     info.add_argument("dataset", type=Path)
-    info.add_argument("--verify", action="store_true", help="also check every file's SHA-256")
+    info.add_argument("--verify", action="store_true",
+                      help="also check every file's SHA-256, and that the recorded scenario and seed regenerate the "
+                           "opening frames")
     info.set_defaults(run=_cmd_info)
 
 
@@ -24,7 +26,12 @@ def _cmd_info(args: argparse.Namespace) -> int:
     extra = dataset.verify() if args.verify else []
     print(dataset.summary())
     if args.verify:
+        from ..pipeline.reproduce import check_reproduces
+
         print("verified  the manifest and every file it lists match their SHA-256")
+        note = check_reproduces(dataset)
+        print(f"note      {note}" if note else "reproduced its scenario and seed regenerate its opening frames "
+                                                "(ego poses and ground truth) byte for byte")
         if extra:
             shown = ", ".join(extra[:10]) + (f" and {len(extra) - 10} more" if len(extra) > 10 else "")
             print(f"extra     {len(extra)} file(s) not in the manifest (not part of the dataset): {shown}")
