@@ -9,6 +9,7 @@ truth's own boxes were, so that the scorer and the exports compare the same pixe
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
@@ -20,7 +21,7 @@ import pyarrow.compute as pc
 from ..causes import CAUSE_BITS, CAUSE_NAMES, Cause
 from ..errors import DatasetError
 from ..geometry import as_estimated, project_boxes_at
-from ..types import BOX2D_FIELDS, BOX3D_FIELDS, EGO_ID, Collision, EgoPose, Rig
+from ..types import BOX2D_FIELDS, BOX3D_FIELDS, EGO_ID, CameraGroundTruth, Collision, EgoPose, GroundTruthFrame, Rig
 from .arrow_columns import shared_strings, string_codes
 from .tables import SCHEMAS
 from .tracks_file import TrackRows
@@ -449,3 +450,36 @@ def project_tracks(truth: GroundTruth, tracks3d: TrackRows, *, chunk_frames: int
         boxes=np.concatenate(boxes),
         camera=np.concatenate(camera),
     )
+
+
+def ground_truth_frames(dataset: Dataset) -> Iterator[GroundTruthFrame]:
+    """Every frame's :class:`GroundTruthFrame`, in order, with per-camera projections: views on the dataset's
+    :attr:`~simrig.dataset.Dataset.ground_truth`."""
+    truth = dataset.ground_truth
+    boxes2d, truncation, occlusion, depth = truth.boxes2d, truth.truncation, truth.occlusion, load_depth(dataset)
+    collisions: dict[int, list] = {}
+    for frame, collision in truth.collisions:
+        collisions.setdefault(frame, []).append(collision)
+    for position, frame in enumerate(truth.frames):
+        rows = truth.frame_rows(position)
+        per_camera = {
+            name: CameraGroundTruth(
+                boxes=boxes2d[rows, index],
+                truncation=truncation[rows, index],
+                depth=depth[rows, index],
+                in_view=truth.in_view[rows, index],
+                occlusion=occlusion[rows, index],
+            )
+            for index, name in enumerate(truth.rig.camera_names)
+        }
+        yield GroundTruthFrame(
+            frame=int(frame),
+            timestamp=float(truth.timestamps[position]),
+            ego=truth.egos[position],
+            actor_ids=truth.actor_id[rows],
+            classes=truth.label[rows],
+            boxes=truth.boxes[rows],
+            cameras=per_camera,
+            events=truth.events[position],
+            collisions=tuple(collisions.get(int(frame), ())),
+        )

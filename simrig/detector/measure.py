@@ -28,8 +28,8 @@ from simrig.scenarios.evaluation_schema import NUSCENES_CLASS_RANGE_M, VEHICLE_C
 
 from ..causes import Cause, cause_masks
 from ..dataset import Dataset
+from ..dataset.delivery import embedding_matrix
 from ..dataset.ground_truth import per_label
-from ..dataset.reader import embedding_matrix
 from ..geometry import camera_from_world, viewing_bearings
 from ..types import BOX3D_FIELDS, EgoPose
 from .nuscenes_metrics import DIST_THRESHOLDS, TP_METRICS, TP_THRESHOLD, accumulate, calc_ap, calc_tp, match_class

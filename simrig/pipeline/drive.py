@@ -27,9 +27,9 @@ from pathlib import Path
 import numpy as np
 
 from simrig.dataset import Dataset
+from simrig.dataset.delivery import frame_detections
 from simrig.dataset.manifest import write_json_atomic
 from simrig.dataset.outputs import check_own_folder, write_text_atomic
-from simrig.dataset.reader import frame_detections
 from simrig.dataset.run_folder import DATASET_DIR, REPORT, TRACKS_DIR
 from simrig.dataset.tracks_file import TrackTables, write_tracks
 from simrig.dataset.writer import arrow_table
