@@ -238,3 +238,12 @@ def test_every_all_names_only_what_its_module_has() -> None:
         loaded = importlib.import_module(module)
         missing += [f"{module}.{name}" for name in loaded.__all__ if not hasattr(loaded, name)]
     assert declared >= 10 and missing == []
+
+
+def test_every_file_the_architecture_page_walks_through_exists():
+    import re
+
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    walk = text.split("## One setting, end to end", 1)[1].split("\n## ", 1)[0]
+    named = set(re.findall(r"`((?:simrig|scenarios|tracker|tests)/[\w/]+\.py)`", walk))
+    assert len(named) >= 10 and [path for path in sorted(named) if not (ROOT / path).is_file()] == []
