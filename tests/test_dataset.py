@@ -143,7 +143,7 @@ def test_a_road_without_traffic_reads_back_as_empty_frames(tmp_path):
     assert len(frames) == 4
     assert frames[0].boxes.shape == (0, 9)
     assert frames[0].cameras["CAM_FRONT"].boxes.shape == (0, 4)
-    assert "0–0 per frame" in dataset.summary()
+    assert "; 0 per frame, mean 0.0" in dataset.summary()
 
 
 def test_sensor_frames_carry_arrays_and_the_object_view_flattens_back_to_the_same_arrays(small_dataset):

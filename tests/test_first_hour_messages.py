@@ -359,3 +359,29 @@ def test_info_verify_refuses_a_rehashed_manifest_whose_seed_or_scenario_did_not_
     copy = _rehashed(small_dataset, tmp_path, edit)
     err = _error(capsys, ["info", str(copy), "--verify"])
     assert said in err and "the manifest does not describe what made this dataset" in err
+
+
+def test_a_plugin_tracker_that_fails_to_import_is_one_line_and_the_others_are_listed(monkeypatch, capsys):
+    """An installed tracker whose module raises on import (a missing dependency) ended `simrig trackers` in a
+    traceback after half the list."""
+    from simrig.trackers import registry
+
+    monkeypatch.setattr(registry, "_LAZY", {**registry._LAZY, "aaa_broken": "no_such_module_xyz:Tracker"})
+    assert main(["trackers"]) == 1
+    out, err = capsys.readouterr()
+    assert "simrig: tracker 'aaa_broken' cannot be imported (ModuleNotFoundError: No module named " in err
+    assert "Traceback" not in err and "saga: " in out and "sort: " in out
+
+
+def test_a_dataset_folder_or_a_run_folder_given_as_another_commands_out_is_named_for_what_it_is(
+        small_dataset, tmp_path, capsys):
+    """`--out` at a dataset said the folder "holds no dataset"; `generate --out RUN` gave no hint of RUN/dataset."""
+    import shutil
+
+    copy = shutil.copytree(small_dataset.path, tmp_path / "ds")
+    err = _error(capsys, ["run", "highway_surround6", "--frames", "5", "--out", str(copy)])
+    assert f"run folder {str(copy)!r} is not empty and holds no dataset; it is a simrig dataset folder" in err
+    (tmp_path / "run").mkdir()
+    shutil.copytree(small_dataset.path, tmp_path / "run" / "dataset")
+    err = _error(capsys, ["generate", "highway_surround6", "--frames", "5", "--out", str(tmp_path / "run")])
+    assert f"it looks like a 'simrig run' folder: its dataset is {str(tmp_path / 'run' / 'dataset')!r}" in err

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import traceback
 from pathlib import Path
 
 from simrig.scenarios import DEFAULT_SCENARIO, catalog, load_scenario
@@ -42,10 +44,20 @@ def _cmd_trackers(args: argparse.Namespace) -> int:
     warning = ownership_warning()
     if warning:
         print(warning, file=sys.stderr)
+    broken = 0
     for name in tracker.available():
+        try:
+            parameters = tracker.parameters(name)
+        except (Exception, SystemExit) as error:  # a plugin's module that fails to import: say so, list the rest
+            broken += 1
+            if os.environ.get("SIMRIG_TRACEBACK") == "1":
+                traceback.print_exc()
+            print(f"simrig: tracker {name!r} cannot be imported ({type(error).__name__}: {error}); "
+                  "SIMRIG_TRACEBACK=1 shows where", file=sys.stderr)
+            continue
         settings = ", ".join(
             f"{key}={value!r}" if value is not inspect.Parameter.empty else key
-            for key, value in tracker.parameters(name).items()
+            for key, value in parameters.items()
         )
         print(f"{name}: {settings}")
-    return 0
+    return 1 if broken else 0

@@ -93,12 +93,13 @@ PARTIAL_MARKER = ".simrig-partial"
 
 
 def check_own_folder(out: Path, *, what: str, marker: str, made: Iterable[str] = (),
-                     marker_keys: Iterable[str] = ()) -> None:
+                     marker_keys: Iterable[str] = (), hint: str = "") -> None:
     """Refuse ``out`` as the folder of a command that writes several files there unless it is new or empty,
     holds ``marker`` (the file that command writes first, e.g. ``bench.json``; when ``marker_keys`` are given,
     a JSON object with those keys — a user's own file of that name is not simrig's), or holds only names in
     ``made`` (what the command itself writes before its marker) and hidden partial folders. ``what`` names the
-    command's folder in the message (e.g. ``"bench folder"``)."""
+    command's folder in the message (e.g. ``"bench folder"``); ``hint`` (``"; it is …"``) says what the folder
+    is when the caller can tell."""
     if not out.is_dir():
         return
     made = set(made)
@@ -107,8 +108,8 @@ def check_own_folder(out: Path, *, what: str, marker: str, made: Iterable[str] =
         return
     if all(name in made or (name.startswith(".") and ".partial" in name) for name in entries):
         return
-    raise OutputPathError(f"{what} {str(out)!r} is not empty and holds no {marker}: simrig writes only into a new "
-                          f"or empty folder or one it made; choose another --out")
+    raise OutputPathError(f"{what} {str(out)!r} is not empty and holds no {marker}{hint}: simrig writes only into a "
+                          f"new or empty folder or one it made; choose another --out")
 
 
 def check_no_links(root: Path, relative: str | Path, *, what: str) -> None:

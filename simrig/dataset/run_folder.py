@@ -14,9 +14,24 @@ commands that read it (``explain``, ``view``)::
     report.md                     every tracker run in this folder, one section each (sorted by label)
 """
 
+from pathlib import Path
+
+from .manifest import MANIFEST_NAME
+
 DATASET_DIR = "dataset"
 TRACKS_DIR = "tracks"
 SCORES_DIR = "scores"
 EXPLAIN_DIR = "explain"
 REPORT = "report.md"
 TRACKER_RECORD = "tracker.json"
+
+
+def what_folder_holds(out: Path) -> str:
+    """``"; it is …"`` for a folder that holds a simrig dataset or is a run folder (for a refusal of it as another
+    command's output), ``""`` otherwise."""
+    if (out / MANIFEST_NAME).is_file():
+        return ("; it is a simrig dataset folder, which simrig reads and does not write into (simrig track DATASET "
+                "--tracker NAME runs a tracker on it)")
+    if (out / DATASET_DIR / MANIFEST_NAME).is_file():
+        return f"; it looks like a 'simrig run' folder: its dataset is {str(out / DATASET_DIR)!r}"
+    return ""

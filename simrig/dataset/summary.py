@@ -90,7 +90,7 @@ def summary(dataset: Dataset) -> str:
         f"({dataset.frame_count / scenario['frame_rate_hz']:.1f} s)",
         f"actors    {counts['actors']} distinct "
         f"({', '.join(f'{k} {v}' for k, v in class_counts.items()) or 'none'}); "
-        f"{counts['actors_per_frame_min']}–{counts['actors_per_frame_max']} per frame, "
+        f"{_span(counts['actors_per_frame_min'], counts['actors_per_frame_max'])} per frame, "
         f"mean {counts['actors_per_frame_mean']:.1f}",
         f"rig       {dataset.rig.name}: {', '.join(dataset.rig.camera_names) or 'no cameras (3D only)'}",
         f"rows      ground_truth {counts['truth_rows']}, projections {counts['projection_rows']} "
@@ -109,3 +109,8 @@ def summary(dataset: Dataset) -> str:
                      f" ground truth; rig {'calibrated' if source.get('calibrated_rig') else 'unknown'}; "
                      "no detections, error causes unknown")
     return "\n".join(lines)
+
+
+def _span(low: int, high: int) -> str:
+    """``"39–40"``, or ``"40"`` when both ends are one number."""
+    return str(low) if low == high else f"{low}–{high}"

@@ -31,6 +31,7 @@ from .manifest import (
     written_by_simrig,
 )
 from .outputs import PARTIAL_MARKER, check_output_path, make_partial, partial_sibling, publish, remove_stale_partials
+from .run_folder import what_folder_holds
 from .tables import ALL_SCHEMAS, SCHEMAS
 
 FRAMES_PER_ROW_GROUP = 100
@@ -59,8 +60,8 @@ def check_output_folder(out: Path, *, overwrite: bool) -> None:
         )
     if manifest is None and any(out.iterdir()):
         raise DatasetError(
-            f"output folder {str(out)!r} is not empty and holds no simrig dataset; simrig replaces only a folder "
-            "it wrote (--overwrite included): choose another folder"
+            f"output folder {str(out)!r} is not empty and holds no simrig dataset{what_folder_holds(out)}; simrig "
+            "replaces only a folder it wrote (--overwrite included): choose another folder"
         )
 
 

@@ -30,7 +30,7 @@ from simrig.dataset import Dataset
 from simrig.dataset.delivery import frame_detections
 from simrig.dataset.manifest import write_json_atomic
 from simrig.dataset.outputs import check_own_folder, write_text_atomic
-from simrig.dataset.run_folder import DATASET_DIR, REPORT, TRACKS_DIR
+from simrig.dataset.run_folder import DATASET_DIR, REPORT, TRACKS_DIR, what_folder_holds
 from simrig.dataset.tracks_file import TrackTables, write_tracks
 from simrig.dataset.writer import arrow_table
 from simrig.errors import DatasetError, SimrigError
@@ -196,7 +196,8 @@ def drive_folder(scenario: Scenario, *, seed: int, tracker, out: Path | str, par
     ``outcome.json``; ``out/report.md`` compares every drive in the folder."""
     check_drivable(scenario)
     out = Path(out)
-    check_own_folder(out, what="drive folder", marker=REPORT, made=(REFERENCE_DIR, DRIVES_DIR))
+    check_own_folder(out, what="drive folder", marker=REPORT, made=(REFERENCE_DIR, DRIVES_DIR),
+                     hint=what_folder_holds(out) if out.is_dir() else "")
     reference_dir = out / REFERENCE_DIR
     key = drive_key(scenario, seed, frames, _TruthPerception.record)
     held = _drive_manifest(reference_dir / DATASET_DIR)

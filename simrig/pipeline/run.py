@@ -23,7 +23,7 @@ from pathlib import Path
 from simrig.dataset import Dataset
 from simrig.dataset.manifest import read_manifest, write_json_atomic
 from simrig.dataset.outputs import atomic_file, check_output_path, check_own_folder, write_text_atomic
-from simrig.dataset.run_folder import DATASET_DIR, REPORT, SCORES_DIR, TRACKER_RECORD, TRACKS_DIR
+from simrig.dataset.run_folder import DATASET_DIR, REPORT, SCORES_DIR, TRACKER_RECORD, TRACKS_DIR, what_folder_holds
 from simrig.errors import DatasetError, DatasetExistsError
 from simrig.names import path_part
 from simrig.pipeline.generate import generate
@@ -117,7 +117,8 @@ def run_pipeline(
     loaded = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     out = Path(out) if out is not None else Path("runs") / f"{path_part(loaded.name, 'scenario name')}-seed{seed}"
     check_output_path(out, what="--out")
-    check_own_folder(out, what="run folder", marker=DATASET_DIR)  # a run writes its dataset first
+    check_own_folder(out, what="run folder", marker=DATASET_DIR,  # a run writes its dataset first
+                     hint=what_folder_holds(out) if out.is_dir() else "")
     build_tracker(tracker, params)  # checked early: a typo should not cost a generation
     if camera is not None:  # and the camera too: the rig is known before anything is generated
         cameras = build_rig(loaded.rig).camera_names
