@@ -23,7 +23,8 @@ if TYPE_CHECKING:
 
 def frame_detections(table: pa.Table, frame: int, rig: Rig, dimension: int) -> DetectionArrays:
     """What a tracker is given for ``frame`` from a ``detections`` table holding that frame's rows (as written,
-    before the dataset exists: the closed-loop drive), exactly as :meth:`Dataset.sensor_frames` gives it."""
+    before the dataset exists: the closed-loop drive), exactly as
+    :meth:`simrig.dataset.Dataset.sensor_frames` gives it."""
     return _DetectionChunk.of_table(table, rig, dimension, f"frame {frame}: detections").frame_arrays(frame)
 
 
@@ -146,7 +147,7 @@ def sensor_frames(dataset: Dataset) -> Iterator[SensorFrame]:
 
 
 def _delivered_sensor_frames(dataset: Dataset) -> Iterator[SensorFrame]:
-    """:meth:`sensor_frames` of a dataset with capture timing: each detection is given at the step of the
+    """:func:`sensor_frames` of a dataset with capture timing: each detection is given at the step of the
     frame its capture arrives by (``captures.arrival_frame``), with its camera's reported capture time, and
     marked late when that is after its own frame. A capture taken in a dropped frame is lost; one arriving
     at a dropped frame is given at the next frame that is stepped. Reads the detections whole."""

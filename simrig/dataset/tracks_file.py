@@ -82,8 +82,8 @@ class TrackRows:
 @dataclass(frozen=True, eq=False)
 class TrackSet:
     """What a tracker produced: 3D rows, 2D rows, or both; ``source`` is the path they were read from;
-    ``made_on``: the :attr:`~simrig.dataset.Dataset.identity` of the dataset they were made on, when simrig
-    recorded it (tracks simrig wrote; ``None`` for other tools' files)."""
+    ``made_on``: the ``identity`` (a :class:`~simrig.dataset.Dataset` attribute) of the dataset they were made on,
+    when simrig recorded it (tracks simrig wrote; ``None`` for other tools' files)."""
 
     source: str
     tracks3d: TrackRows | None
