@@ -25,12 +25,9 @@ import dataclasses
 
 import numpy as np
 
+from simrig.seeding import stream_generator
 from simrig.types import Rig, SensorFrame, Track
 
-IDENTITY_STREAM = 1
-"""Stream of the identity-change draws (``np.random.default_rng([seed, stream])``)."""
-VELOCITY_STREAM = 2
-"""Stream of the velocity-noise draws."""
 MAX_LATENCY_S = 60.0
 """[s] the longest latency taken."""
 
@@ -49,8 +46,8 @@ class DegradedTracker:
         if inner:
             self.inner.reset(rig=rig, seed=seed)
         base = 0 if seed is None else int(seed)
-        self._identity_rng = np.random.default_rng([base, IDENTITY_STREAM])
-        self._velocity_rng = np.random.default_rng([base, VELOCITY_STREAM])
+        self._identity_rng = stream_generator("degraded_identity", base)
+        self._velocity_rng = stream_generator("degraded_velocity", base)
         self._times: list[float] = []
         self._outputs: list[list[Track]] = []
         self._renamed: dict[int, int] = {}

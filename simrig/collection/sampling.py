@@ -24,11 +24,8 @@ from scipy.stats import qmc
 
 from simrig.scenarios.search_schema import Dimension
 from simrig.scenarios.space_file import Candidate
+from simrig.seeding import stream_generator, stream_sequence
 
-SETTINGS_STREAM = 0
-"""Spawn key of the stream the settings are drawn from."""
-SEEDS_STREAM = 1
-"""Spawn key of the stream each sequence's scenario seed is drawn from (one sub-stream per sequence)."""
 FIRST_SEQUENCE_SEED = 1_000_000
 """Sequence seeds are at least this: a collection never holds a seed the catalog, the benches or the docs use."""
 
@@ -36,15 +33,14 @@ FIRST_SEQUENCE_SEED = 1_000_000
 def sequence_seed(collection_seed: int, index: int) -> int:
     """The scenario seed of sequence ``index`` (0-based) of the collection of ``collection_seed``: in
     [:data:`FIRST_SEQUENCE_SEED`, 2³¹), independent of how many sequences the collection has."""
-    state = np.random.SeedSequence(collection_seed, spawn_key=(SEEDS_STREAM, index)).generate_state(1, np.uint32)[0]
+    state = stream_sequence("collection_seeds", collection_seed, index).generate_state(1, np.uint32)[0]
     return FIRST_SEQUENCE_SEED + int(state >> 1) % (2**31 - FIRST_SEQUENCE_SEED)
 
 
 def unit_draws(columns: int, count: int, collection_seed: int) -> np.ndarray:
     """(``count``, ``columns``) stratified uniform draws in [0, 1): one per stratum of width 1/``count`` in every
     column, the strata of different columns paired at random."""
-    generator = np.random.Generator(np.random.PCG64(np.random.SeedSequence(collection_seed,
-                                                                           spawn_key=(SETTINGS_STREAM,))))
+    generator = stream_generator("collection_settings", collection_seed)
     return qmc.LatinHypercube(d=columns, rng=generator).random(count)
 
 

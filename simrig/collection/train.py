@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from simrig.seeding import stream_generator
 from simrig.trackers.association_features import TRACK_FEATURES
 from simrig.trackers.learned import AssociationModel, design
 
@@ -49,7 +50,7 @@ def permutation_importances(model: AssociationModel, features: np.ndarray, same:
                             seed: int = 0) -> dict[str, float]:
     """Per feature, the mean drop in ROC AUC when its values are shuffled across the pairs (module docstring)."""
     _, score = _sklearn()
-    generator = np.random.default_rng(seed)
+    generator = stream_generator("feature_shuffles", seed)
     base = score(same, model.probability(features))
     drops = {}
     for column, name in enumerate(TRACK_FEATURES):

@@ -33,6 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
+from simrig.seeding import stream_generator
+
 from ..dataset.outputs import write_text_atomic
 from ..errors import SimrigError
 from ..reading import check_regular
@@ -146,7 +148,7 @@ def _codes(column, path: Path, name: str) -> np.ndarray:
 
 def _measured_moments(log: EmbeddingLog, seed: int = 0) -> Moments:
     """The moments of ``log`` (see the module docstring)."""
-    rng = np.random.default_rng(seed)
+    rng = stream_generator("appearance_fit_pairs", seed)
     camera, identity = within_sequences(log)
 
     def cosines(pairs: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
@@ -187,7 +189,7 @@ class _Simulator:
     numbers (common to every evaluation)."""
 
     def __init__(self, dimension: int, gaps: np.ndarray, colours: int, seed: int = 0):
-        rng = np.random.default_rng([seed, dimension])
+        rng = stream_generator("appearance_fit_model", seed, dimension)
         m, d = SIMULATED_PAIRS, dimension
         self.gaps, self.colours = gaps, colours
         self.own = _unit(rng.standard_normal((2, m, d)))

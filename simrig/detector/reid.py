@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simrig.seeding import stream_generator
+
 from ..errors import SimrigError
 from ..sensor.appearance import roc_auc
 
@@ -220,7 +222,7 @@ def _split_sample(per_sequence: list[tuple[np.ndarray, np.ndarray]], count: int,
 def reid_table(log: EmbeddingLog, *, seed: int = 0) -> list[ReidRow]:
     """The re-ID table of ``log``: a row per gap band of :data:`GAP_BANDS`, the pooled 1–30 frame row and the
     cross-camera row (:data:`CROSS_CAMERA`). Deterministic for a given ``seed``."""
-    rng = np.random.default_rng(seed)
+    rng = stream_generator("reid_pairs", seed)
     sequences = [np.nonzero(log.sequence == s)[0] for s in np.unique(log.sequence)]
     rows: list[ReidRow] = []
     bands = [*GAP_BANDS, (1, 30)]

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import t as student_t
 
+from simrig.seeding import stream_generator
+
 Coalition = frozenset[str]
 
 
@@ -68,7 +70,7 @@ def coalition_order(coalition: Coalition) -> tuple[int, list[str]]:
 def sample_orders(players: Sequence[str], samples: int, seed: int) -> list[tuple[str, ...]]:
     """``samples`` random orders of ``players`` (rounded up to an even count): each drawn order followed by its
     reverse. Same seed, same orders."""
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(20,)))
+    rng = stream_generator("explain_orders", seed)
     orders = []
     for _ in range((samples + 1) // 2):
         order = tuple(players[i] for i in rng.permutation(len(players)))

@@ -31,6 +31,8 @@ import numpy as np
 import pandas as pd
 from scipy.stats import rankdata
 
+from simrig.seeding import stream_generator
+
 METRICS = (("AMOTA", "3d_AMOTA", 1), ("HOTA", "2d_HOTA", 1), ("IDF1", "2d_IDF1", 1), ("MOTA", "3d_MOTA", 1),
            ("ATVE", "3d_ATVE", -1), ("PKL", "3d_PKL", -1), ("dACC", "3d_dACC", -1), ("HZ_MISS", "3d_HZ_MISS", -1),
            ("HZ_FAKE", "3d_HZ_FAKE", -1))
@@ -195,7 +197,7 @@ def correlate(results: pd.DataFrame, *, replicates: int = REPLICATES, seed: int 
     if len(seeds) < MIN_SEEDS:
         raise TooFewCells(f"{len(seeds)} seed{'s' * (len(seeds) != 1)}: the intervals over seeds need at least "
                           f"{MIN_SEEDS}")
-    draws = np.random.default_rng(seed).integers(0, len(seeds), size=(replicates, len(seeds)))
+    draws = stream_generator("seed_bootstrap", seed).integers(0, len(seeds), size=(replicates, len(seeds)))
     scenarios = tuple(dict.fromkeys(values["scenario"]))
     names = [(m, mc) for m, mc, _ in METRICS] + [(o, oc) for o, oc, _ in OUTCOMES]
     spearman, kendall, spearman_boot, kendall_boot, means, counts = {}, {}, {}, {}, {}, {}

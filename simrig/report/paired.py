@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simrig.seeding import stream_generator
+
 RESAMPLES = 10_000
 CONFIDENCE = 0.95
 
@@ -82,7 +84,7 @@ def paired_difference(a, b, *, seed: int = 0) -> PairedDifference:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             interval = bootstrap((difference,), np.mean, n_resamples=RESAMPLES, confidence_level=CONFIDENCE,
-                                 method=method, rng=np.random.default_rng(seed)).confidence_interval
+                                 method=method, rng=stream_generator("paired_bootstrap", seed)).confidence_interval
         low, high = float(interval.low), float(interval.high)
         if math.isfinite(low) and math.isfinite(high):
             break
@@ -111,5 +113,5 @@ def paired_ratio(a, b, *, seed: int = 0) -> tuple[float, float, float]:
         warnings.simplefilter("ignore")
         interval = bootstrap((a, b), lambda x, y, axis=-1: x.sum(axis=axis) / y.sum(axis=axis), paired=True,
                              vectorized=True, n_resamples=RESAMPLES, confidence_level=CONFIDENCE, method="BCa",
-                             rng=np.random.default_rng(seed)).confidence_interval
+                             rng=stream_generator("ratio_bootstrap", seed)).confidence_interval
     return ratio, float(interval.low), float(interval.high)

@@ -48,7 +48,7 @@ from simrig.dataset import Dataset
 from simrig.dataset.ground_truth import GroundTruth
 from simrig.dataset.tracks_file import TrackRows
 from simrig.scenarios.schema import TrafficConfig, scenario_from_record
-from simrig.seeding import RandomStreams
+from simrig.seeding import RandomStreams, stream_generator
 
 from .inputs import in_class_range
 
@@ -134,7 +134,7 @@ class PlanningRoad:
         self._plan, self._planning_ego, self._phantoms = plan, planning_ego, phantoms_from_boxes
         self._ego_type = VEHICLE_TYPES[EGO_CLASS]
         world = TrafficWorld(traffic, frame_rate_hz, env_seed=RandomStreams(seed).integer_seed("traffic"),
-                             rng=np.random.default_rng(0))
+                             rng=stream_generator("planning_road"))
         self.road, self.route = world.planning_road()
         self._world = world  # keeps highway-env's environment (and its road) alive
         self.target_speed = traffic.ego_speed_mps

@@ -15,7 +15,6 @@ import math
 import shlex
 import time
 import warnings
-import zlib
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +26,7 @@ from simrig.engine_names import ENGINES
 from simrig.names import path_part
 from simrig.pools import RayExecutor, process_pool, stop_workers
 from simrig.reading import read_capped
+from simrig.seeding import stream_sequence
 
 from ..dataset.manifest import write_json_atomic
 from ..dataset.outputs import check_output_path, check_own_folder, folder_lock
@@ -236,7 +236,7 @@ def startup_trials(budget: int) -> int:
 def _sampler(stream: str, seed: int, index: int, budget: int):
     import optuna
 
-    state = int(np.random.SeedSequence([seed, zlib.crc32(stream.encode()), index]).generate_state(1)[0])
+    state = int(stream_sequence(f"search_{stream}", seed, index).generate_state(1)[0])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         if stream == "tpe":
