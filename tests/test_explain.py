@@ -269,3 +269,50 @@ def test_a_rerun_stopped_before_its_end_leaves_no_finished_looking_explain(expla
     with pytest.raises(KeyboardInterrupt):
         explain(run, causes=["occlusion", "random_misses"], metrics=["AMOTA"], workers=1)
     assert (out / "verdicts.parquet").is_file() and not (out / "explain.json").exists()
+
+
+def _synthetic_play(monkeypatch, game_value, players, tolerance, samples=None):
+    """``play`` on a game whose coalition values are ``game_value(removed)``, with the coalitions it asks for."""
+    import numpy as np
+
+    from simrig.explain import api
+    from simrig.explain.coalition import CoalitionResult
+
+    asked = []
+
+    def fake_tasks(tasks, engine, workers, address, progress=False):
+        asked.extend(frozenset(task.removed) for task in tasks)
+        return [(task, (CoalitionResult(task.removed, np.array([game_value(frozenset(task.removed))]), None),))
+                for task in tasks]
+
+    class Seeded:
+        seed = 5
+        path = "unused"
+
+    monkeypatch.setattr(api, "run_tasks", fake_tasks)
+    record = {"tracker": "sort", "params": {}, "camera": None}
+    game = api.play(Seeded(), record, players, {"X": ("3d", "X")}, samples, None, tolerance=tolerance)
+    return game, asked
+
+
+def test_a_game_sampled_to_a_tolerance_stops_at_the_first_round_whose_intervals_are_within_it(monkeypatch):
+    from simrig.explain.api import FIRST_ROUND
+    from simrig.explain.shapley import sample_orders
+
+    players = tuple("abcdefgh")  # more than are computed exactly
+    weight = {p: i + 1.0 for i, p in enumerate(players)}
+    additive, asked = _synthetic_play(monkeypatch, lambda removed: sum(weight[p] for p in removed), players, 0.05)
+    # every marginal of an additive game is the player's weight: zero spread, so the first round is within it
+    assert len(additive.orders) == FIRST_ROUND and additive.within(0.05)
+    assert {p: float(additive.shares[p][0]) for p in players} == weight
+    assert len(asked) == len(set(asked))  # no coalition run twice
+
+    def interacting(removed):  # a pair of causes that only together cost anything, plus noise-like terms
+        return 10.0 * ({"a", "b"} <= removed) + sum(((ord(p) % 7) - 3) * (len(removed) % 3) for p in removed)
+
+    capped, asked = _synthetic_play(monkeypatch, interacting, players, 0.0, samples=12)
+    assert len(capped.orders) == 12 and not capped.within(0.0)  # a zero tolerance samples to the most allowed
+    assert capped.orders == sample_orders(players, 12, 5)  # the rounds' orders are --samples 12's orders
+    assert len(asked) == len(set(asked))
+    assert sum(float(capped.shares[p][0]) for p in players) == pytest.approx(interacting(frozenset(players))
+                                                                           - interacting(frozenset()))

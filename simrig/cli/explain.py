@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
+from functools import partial
 from pathlib import Path
 
-from .arguments import EXPLAIN_MAX_SAMPLES, int_at_least, name_list, trust_argument
+from .arguments import EXPLAIN_MAX_SAMPLES, int_at_least, name_list, non_negative_float, trust_argument
 
 
 def register_explain(commands) -> None:
@@ -21,7 +22,13 @@ def register_explain(commands) -> None:
     explainer.add_argument("--causes", type=name_list, default=None, metavar="A,B,...",
                            help="cause groups to share among (default: every group present in the scenario)")
     explainer.add_argument("--samples", type=int_at_least(2, EXPLAIN_MAX_SAMPLES), default=None, metavar="N",
-                           help="sample N permutations (default: exact when there are at most 7 groups, else 12)")
+                           help="sample N permutations (default: exact when there are at most 7 groups, else 12); "
+                                "with --tolerance, the most to sample")
+    explainer.add_argument("--tolerance", type=partial(non_negative_float, maximum=1.0), default=None, metavar="F",
+                           help="sample permutations 4 at a time until every share's 95%% half-width is within F × "
+                                "|perfect − actual| of its metric (e.g. 0.1), or --samples are drawn")
+    explainer.add_argument("--exact", action="store_true",
+                           help="every coalition of the groups (2^k counterfactual runs), however many groups")
     explainer.add_argument("--engine", choices=("local", "ray"), default="local", help="where the runs go")
     explainer.add_argument("--workers", type=int_at_least(1), default=None,
                            help="processes (local; 1 runs in this process) or CPUs of a local Ray instance")
@@ -35,8 +42,8 @@ def _cmd_explain(args: argparse.Namespace) -> int:
     from ..explain import explain
 
     result = explain(args.run_dir, label=args.label, metrics=args.metric, causes=args.causes, samples=args.samples,
-                     engine=args.engine, workers=args.workers, address=args.address, progress=not args.quiet,
-                     trust_file=args.trust_file)
+                     tolerance=args.tolerance, exact=args.exact, engine=args.engine, workers=args.workers,
+                     address=args.address, progress=not args.quiet, trust_file=args.trust_file)
     print(result.table)
     plots = f"{len(result.plots)} waterfall plot{'s' if len(result.plots) != 1 else ''}"
     print(f"\nwrote     {result.out}: explain.json, explain.md, verdicts.parquet, {plots} "

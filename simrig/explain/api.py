@@ -59,6 +59,11 @@ EXACT_LIMIT = 7
 """Up to this many groups the Shapley values are exact (2^7 = 128 coalitions); above, sampled."""
 DEFAULT_SAMPLES = 12
 """Permutations sampled when the groups are too many for the exact values and ``samples`` is not given."""
+EXACT_MAX = 12
+"""Most groups ``exact=True`` (``--exact``) computes every coalition for (2^12 = 4,096 counterfactual runs)."""
+FIRST_ROUND = 4
+"""Permutations of the first round of a game sampled to a tolerance (two antithetic pairs: the fewest that give
+an interval); each further round adds as many."""
 MAX_SAMPLES = 10_000
 """Most permutations one game may sample: the orders are held in memory, and far fewer already give a
 half-width below the run-to-run noise."""
@@ -84,17 +89,20 @@ class ExplainResult:
 
 
 def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str] | None = None,
-            causes: list[str] | None = None, samples: int | None = None, engine: str = "local",
-            workers: int | None = None, address: str | None = None, progress: bool = False,
-            trust_file: bool = False) -> ExplainResult:
+            causes: list[str] | None = None, samples: int | None = None, tolerance: float | None = None,
+            exact: bool = False, engine: str = "local", workers: int | None = None, address: str | None = None,
+            progress: bool = False, trust_file: bool = False) -> ExplainResult:
     """Explain the tracker run ``label`` of the ``simrig run`` folder ``run_dir`` (see the module docstring).
 
     ``metrics``: overall metric names (3D first when the tracker has 3D tracks; ``2d:NAME``/``3d:NAME`` to
     choose); ``causes``: the groups to share among (default: every group present in the scenario — an absent
     one is a null cause, share exactly 0); ``samples``: permutations to sample (default: exact when there are
-    at most :data:`EXACT_LIMIT` groups, else :data:`DEFAULT_SAMPLES`); ``engine`` ``local`` (a process pool of
-    ``workers``; 1 runs in this process) or ``ray``. A run folder is data: its ``tracker.json`` may name a
-    registered tracker; a ``module:attribute`` there is imported only with ``trust_file`` (``--trust-file``,
+    at most :data:`EXACT_LIMIT` groups, else :data:`DEFAULT_SAMPLES`); ``tolerance``: sample in rounds of
+    :data:`FIRST_ROUND` permutations until every share's 95 % half-width is within ``tolerance`` × |perfect −
+    actual| of its metric, or ``samples`` (default :data:`DEFAULT_SAMPLES`) are drawn; ``exact``: every
+    coalition whatever the number of groups (up to :data:`EXACT_MAX`); ``engine`` ``local`` (a
+    process pool of ``workers``; 1 runs in this process) or ``ray``. A run folder is data: its ``tracker.json``
+    may name a registered tracker; a ``module:attribute`` there is imported only with ``trust_file`` (``--trust-file``,
     :mod:`simrig.pipeline.trust`)."""
     started = time.perf_counter()
     run_dir = Path(run_dir)
@@ -111,7 +119,8 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     players = _players(causes, known, present, scenario.name)
     chosen = choose_metrics(metrics, has_3d)
     game = play(dataset, record, players, chosen, samples, run_dir / EXPLAIN_DIR / CACHE_DIR, engine=engine,
-                workers=workers, address=address, verdicts=True, progress=progress)
+                workers=workers, address=address, verdicts=True, progress=progress, tolerance=tolerance,
+                exact=exact)
     verdicts = _verdicts(run_dir, label, players, game.results)
     document = _document(scenario.name, dataset, label, record, chosen, known, present, game, verdicts, run_dir)
     out = run_dir / EXPLAIN_DIR / label
@@ -139,6 +148,17 @@ class Game:
     results: dict[Coalition, CoalitionResult]
     shares: dict[str, np.ndarray]
     half: dict[str, np.ndarray] | None
+    tolerance: float | None = None
+    """The stopping rule's tolerance (sampled to a tolerance), else None."""
+
+    def within(self, tolerance: float) -> bool:
+        """Whether every share's 95 % half-width is within ``tolerance`` × |perfect − actual| of its metric
+        (a metric undefined on either end is not held to it)."""
+        if self.half is None:
+            return True
+        gap = np.abs(self.perfect - self.actual)
+        held = np.isfinite(gap)
+        return all(bool(np.all(self.half[p][held] <= tolerance * gap[held])) for p in self.players)
 
     @property
     def actual(self) -> np.ndarray:
@@ -175,16 +195,17 @@ class GamePlan:
     keep_errors: frozenset[Coalition]
 
 
-def plan_game(dataset: Dataset, players: tuple[str, ...], samples: int | None, verdicts: bool = False) -> GamePlan:
+def plan_game(dataset: Dataset, players: tuple[str, ...], samples: int | None, verdicts: bool = False,
+              exact: bool = False) -> GamePlan:
     """The coalitions the Shapley values of ``players`` need: all 2^k when ``samples`` is None and there are at
     most :data:`EXACT_LIMIT` players, else the prefixes of ``samples`` (default :data:`DEFAULT_SAMPLES`)
-    permutations drawn from the dataset's seed (the same for every tracker of one dataset). ``verdicts``: also
-    each single removal, and the error keys of those and of the actual run."""
+    permutations drawn from the dataset's seed (the same for every tracker of one dataset); ``exact``: all 2^k
+    whatever k. ``verdicts``: also each single removal, and the error keys of those and of the actual run."""
     if samples is not None and samples < 2:
         raise ExplainError(f"--samples: at least 2 permutations (an order and its reverse) are needed, got {samples}")
     if samples is not None and samples > MAX_SAMPLES:
         raise ExplainError(f"--samples: at most {MAX_SAMPLES:,} permutations, got {samples:,}")
-    exact = samples is None and len(players) <= EXACT_LIMIT
+    exact = samples is None and (exact or len(players) <= EXACT_LIMIT)
     orders = None if exact else sample_orders(players, samples or DEFAULT_SAMPLES, dataset.seed)
     singles = {frozenset({p}) for p in players} if verdicts else set()
     needed = set(all_coalitions(players)) if exact else prefixes(orders) | singles
@@ -193,15 +214,16 @@ def plan_game(dataset: Dataset, players: tuple[str, ...], samples: int | None, v
     return GamePlan(players, exact, orders, tuple(sorted(needed, key=coalition_order)), keep_errors)
 
 
-def settle(plan: GamePlan, results: dict[Coalition, CoalitionResult]) -> Game:
-    """The game's shares from the results of every coalition of ``plan``."""
+def settle(plan: GamePlan, results: dict[Coalition, CoalitionResult], tolerance: float | None = None) -> Game:
+    """The game's shares from the results of every coalition of ``plan`` (``tolerance``: the stopping rule's,
+    when it was sampled to one)."""
     values = {c: r.values for c, r in results.items()}
     if plan.exact:
         shares, half = exact_shares(plan.players, values) if plan.players else {}, None
     else:
         sampled = sampled_shares(plan.players, plan.orders, values)
         shares, half = sampled.shares, sampled.half_width
-    return Game(plan.players, plan.exact, plan.orders, results, shares, half)
+    return Game(plan.players, plan.exact, plan.orders, results, shares, half, None if plan.exact else tolerance)
 
 
 def tracker_run(record: dict, chosen: dict[str, tuple[str, str]], errors: bool,
@@ -214,18 +236,52 @@ def tracker_run(record: dict, chosen: dict[str, tuple[str, str]], errors: bool,
 
 def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[str, tuple[str, str]],
          samples: int | None, scratch: Path, *, engine: str = "local", workers: int | None = None,
-         address: str | None = None, verdicts: bool = False, progress: bool = False) -> Game:
+         address: str | None = None, verdicts: bool = False, progress: bool = False,
+         tolerance: float | None = None, exact: bool = False) -> Game:
     """Run the coalitions of :func:`plan_game` on ``dataset`` with the tracker of ``record`` (counterfactual
-    datasets cached in ``scratch``) and compute the Shapley values (:func:`settle`)."""
-    plan = plan_game(dataset, players, samples, verdicts)
+    datasets cached in ``scratch``) and compute the Shapley values (:func:`settle`). With a ``tolerance`` (and
+    more groups than exact values are computed for), in rounds: :data:`FIRST_ROUND` permutations, then as many
+    more until :meth:`Game.within` the tolerance or ``samples`` (default :data:`DEFAULT_SAMPLES`) are drawn; the
+    orders of a round start with those of the round before, so ``--samples N`` reproduces a game that stopped
+    at N. ``exact``: every coalition, whatever the number of groups."""
+    if exact and (samples is not None or tolerance is not None):
+        raise ExplainError("--exact computes every coalition: it takes no --samples or --tolerance")
+    if exact and len(players) > EXACT_MAX:
+        raise ExplainError(f"--exact: {len(players)} groups would be {2 ** len(players):,} counterfactual runs; at "
+                           f"most {EXACT_MAX} groups (choose them with --causes), or sample")
+    exact = exact or samples is None and len(players) <= EXACT_LIMIT
+    if tolerance is None or exact:
+        plan = plan_game(dataset, players, samples, verdicts, exact)
+        return settle(plan, _run_coalitions(plan, {}, dataset, record, chosen, scratch, engine, workers, address,
+                                            progress))
+    if not (0 <= tolerance <= 1):
+        raise ExplainError(f"--tolerance: a fraction of perfect − actual in [0, 1], got {tolerance}")
+    cap, results = samples or DEFAULT_SAMPLES, {}
+    count = min(cap, FIRST_ROUND)
+    while True:
+        plan = plan_game(dataset, players, count, verdicts)
+        results = _run_coalitions(plan, results, dataset, record, chosen, scratch, engine, workers, address,
+                                  progress)
+        game = settle(plan, results, tolerance)
+        if count >= cap or game.within(tolerance):
+            return game
+        count = min(cap, count + FIRST_ROUND)
+
+
+def _run_coalitions(plan: GamePlan, done: dict[Coalition, CoalitionResult], dataset: Dataset, record: dict,
+                    chosen: dict[str, tuple[str, str]], scratch: Path, engine: str, workers: int | None,
+                    address: str | None, progress: bool) -> dict[Coalition, CoalitionResult]:
+    """``done`` with every coalition of ``plan`` it lacks run; an :class:`ExplainError` naming the first one the
+    tracker failed on."""
     tasks = [CoalitionTask(str(dataset.path), tuple(sorted(c)), str(scratch),
-                           (tracker_run(record, chosen, c in plan.keep_errors),)) for c in plan.needed]
-    results = {frozenset(task.removed): result for task, (result,) in run_tasks(tasks, engine, workers, address,
-                                                                                 progress)}
+                           (tracker_run(record, chosen, c in plan.keep_errors),)) for c in plan.needed if c not in done]
+    results = dict(done)
+    results |= {frozenset(task.removed): result for task, (result,) in run_tasks(tasks, engine, workers, address,
+                                                                                  progress)}
     failed = failed_coalition(results)
     if failed is not None:
         raise ExplainError(failed)
-    return settle(plan, results)
+    return results
 
 
 def failed_coalition(results: dict[Coalition, CoalitionResult]) -> str | None:
@@ -375,6 +431,8 @@ def _document(scenario: str, dataset: Dataset, label: str, record: dict, chosen:
         "scenario": scenario, "seed": dataset.seed, "frames": dataset.frame_count, "label": label,
         "tracker": record["tracker"], "params": record["params"], "camera": record["camera"],
         "mode": "exact" if exact else "sampled", "samples": None if exact else len(orders),
+        "tolerance": game.tolerance,
+        "within_tolerance": None if game.tolerance is None else game.within(game.tolerance),
         "coalitions": len(game.results), "causes": list(players),
         "null_causes": [name for name in known if name not in present and name not in players],
         "kept_on": [name for name in present if name not in players],
@@ -413,7 +471,8 @@ def explain_table(document: dict) -> str:
     sampled = document["mode"] == "sampled"
     interval = sampled and any(value is not None for entry in metrics.values() for value in entry["ci95"].values())
     head = (f"exact Shapley values over {document['coalitions']} coalitions" if not sampled else
-            f"Shapley values sampled from {document['samples']} permutations ({document['coalitions']} coalitions; "
+            f"Shapley values sampled from {document['samples']} permutations{_stopping(document)} "
+            f"({document['coalitions']} coalitions; "
             + ("± half-width of the 95% confidence interval)" if interval else
                "one order and its reverse: no confidence interval, --samples 3 or more gives one)"))
     who = document["tracker"] + (f" ({document['label']})" if document["label"] != document["tracker"] else "")
@@ -451,6 +510,16 @@ def explain_table(document: dict) -> str:
         for row in ("total", *document["causes"], "no single cause"):
             lines.append(row.ljust(width) + "".join(str(kinds[k][row]).rjust(8) for k in kinds))
     return "\n".join(lines)
+
+
+def _stopping(document: dict) -> str:
+    """How a game sampled to a tolerance stopped, for the table's head ('' for a fixed number of samples)."""
+    tolerance = document.get("tolerance")
+    if tolerance is None:
+        return ""
+    if document["within_tolerance"]:
+        return f", stopped with every half-width within {tolerance:.0%} of perfect − actual"
+    return f", the most allowed, before every half-width was within {tolerance:.0%} of perfect − actual"
 
 
 def _explain_markdown(document: dict, table: str | None = None) -> str:
