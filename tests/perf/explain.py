@@ -110,7 +110,8 @@ def main() -> None:
             table, inside, total = accuracy_rows(document, exact[0])
             lines += [f"### {document['samples']} permutations"
                       + (f" (tolerance {keywords['tolerance']:g})" if keywords.get("tolerance") is not None else ""),
-                      "", "| metric | furthest group | abs. error | its half-width | widest half-width | exact inside |",
+                      "",
+                      "| metric | furthest group | abs. error | its half-width | widest half-width | exact inside |",
                       "| --- | --- | --- | --- | --- | --- |", *table, "",
                       f"{inside} of {total} exact values inside their intervals ({inside / total:.0%}).", ""]
         lines += ["Exact shares (every coalition):", "", "```", explain_table(exact[0]), "```", ""]
