@@ -34,35 +34,76 @@ def _hull_equations(points: np.ndarray) -> np.ndarray | None:
 
 
 def _row_spans(equations: np.ndarray, v: np.ndarray, width: int) -> tuple[np.ndarray, np.ndarray]:
-    """First and last pixel column (inclusive; first > last when empty) whose centre lies in the convex
-    region ``equations`` (``(E, 3)``: a·u + b·v + c ≤ 0) on each image row with centre ``v`` ``(R,)``."""
-    a, b, c = equations[:, 0, None], equations[:, 1, None], equations[:, 2, None]
-    rhs = -(b * v[None, :] + c)  # a·u ≤ rhs, (E, R)
+    """First and last pixel column (inclusive; first > last when empty) whose centre lies in a convex region on
+    each of its rows: ``equations`` ``(R, E, 3)`` the half-planes a·u + b·v + c ≤ 0 of the region each row cuts
+    (padded with the neutral 0·u + 0·v − 1 ≤ 0), ``v`` ``(R,)`` the rows' centres."""
+    a, b, c = equations[..., 0], equations[..., 1], equations[..., 2]
+    rhs = -(b * v[:, None] + c)  # a·u ≤ rhs, (R, E)
     with np.errstate(divide="ignore", invalid="ignore"):
         bound = rhs / a
-    upper = np.where(a > 1e-12, bound, np.inf).min(axis=0)
-    lower = np.where(a < -1e-12, bound, -np.inf).max(axis=0)
-    flat_ok = np.where(np.abs(a) <= 1e-12, rhs >= -1e-9, True).all(axis=0)
+    upper = np.where(a > 1e-12, bound, np.inf).min(axis=1)
+    lower = np.where(a < -1e-12, bound, -np.inf).max(axis=1)
+    flat_ok = np.where(np.abs(a) <= 1e-12, rhs >= -1e-9, True).all(axis=1)
     first = np.maximum(0.0, np.ceil(lower - 0.5))
     last = np.minimum(width - 1.0, np.floor(upper - 0.5))
     return np.where(flat_ok, first, 1.0), np.where(flat_ok, last, 0.0)
 
 
-def _count_union(hulls: list[np.ndarray], low: np.ndarray, high: np.ndarray, width: int, height: int) -> int:
-    """Pixel centres inside the image covered by the union of one or two convex ``hulls``, counted row by
-    row exactly: a convex region cuts each row in one span, and two spans overlap in one span."""
-    j0, j1 = max(0, int(np.ceil(low[1] - 0.5))), min(height - 1, int(np.floor(high[1] - 0.5)))
-    if j1 < j0:
-        return 0
-    v = np.arange(j0, j1 + 1, dtype=float) + 0.5
-    spans = [_row_spans(equations, v, width) for equations in hulls]
-    total = sum(np.maximum(0.0, last - first + 1.0).sum() for first, last in spans)
-    if len(spans) == 2:
-        (f1, l1), (f2, l2) = spans
-        total -= np.maximum(0.0, np.minimum(l1, l2) - np.maximum(f1, f2) + 1.0).sum()
-    elif len(spans) > 2:
-        raise ValueError(f"at most two parts per actor are supported, got {len(spans)}")
-    return int(total)
+def _pair_hulls(pixels: np.ndarray, valid: np.ndarray) -> tuple[list[list[np.ndarray]], np.ndarray, np.ndarray]:
+    """Per pair, the hull equations of its parts that cover an area, and the pair's pixel bounds ``(Q, 2)``
+    (low, high; NaN for a pair without such a part)."""
+    q, n_parts = valid.shape[:2]
+    hulls: list[list[np.ndarray]] = [[] for _ in range(q)]
+    low, high = np.full((q, 2), np.nan), np.full((q, 2), np.nan)
+    for pair in range(q):
+        lows, highs = [], []
+        for part in range(n_parts):
+            points = pixels[pair, part][valid[pair, part]]
+            equations = _hull_equations(points) if len(points) else None
+            if equations is None:
+                continue
+            hulls[pair].append(equations)
+            lows.append(points.min(axis=0))
+            highs.append(points.max(axis=0))
+        if lows:
+            low[pair], high[pair] = np.min(lows, axis=0), np.max(highs, axis=0)
+    return hulls, low, high
+
+
+def _count_unions(hulls: list[list[np.ndarray]], low: np.ndarray, high: np.ndarray, width: np.ndarray,
+                  height: np.ndarray) -> np.ndarray:
+    """``(Q,)`` pixel centres inside each pair's image covered by the union of its one or two convex hulls,
+    counted row by row exactly (a convex region cuts a row in one span, two spans overlap in one span), every
+    pair's rows at once."""
+    q = len(hulls)
+    counts = np.zeros(q, dtype=np.int64)
+    if any(len(parts) > 2 for parts in hulls):
+        raise ValueError(f"at most two parts per actor are supported, got {max(len(p) for p in hulls)}")
+    with np.errstate(invalid="ignore"):
+        j0 = np.maximum(0, np.ceil(low[:, 1] - 0.5))
+        j1 = np.minimum(height - 1, np.floor(high[:, 1] - 0.5))
+    rows = np.where(np.isfinite(j0) & np.isfinite(j1) & (j1 >= j0), j1 - j0 + 1, 0).astype(np.int64)
+    if not rows.sum():
+        return counts
+    row_pair = np.repeat(np.arange(q), rows)
+    v = (np.arange(rows.sum()) - np.repeat(np.cumsum(rows) - rows, rows) + np.repeat(j0[rows > 0], rows[rows > 0])
+         + 0.5)
+    edges = max(len(e) for parts in hulls for e in parts)
+    neutral = np.array([0.0, 0.0, -1.0])
+    spans = []
+    for slot in (0, 1):
+        table = np.tile(neutral, (q, edges, 1))
+        present = np.zeros(q, dtype=bool)
+        for pair, parts in enumerate(hulls):
+            if len(parts) > slot and rows[pair]:
+                table[pair, :len(parts[slot])] = parts[slot]
+                present[pair] = True
+        first, last = _row_spans(table[row_pair], v, width[row_pair])
+        spans.append((first, last, present[row_pair]))
+    (f1, l1, p1), (f2, l2, p2) = spans
+    per_row = (np.where(p1, np.maximum(0.0, l1 - f1 + 1.0), 0.0) + np.where(p2, np.maximum(0.0, l2 - f2 + 1.0), 0.0)
+               - np.where(p1 & p2, np.maximum(0.0, np.minimum(l1, l2) - np.maximum(f1, f2) + 1.0), 0.0))
+    return np.bincount(row_pair, weights=per_row, minlength=q).astype(np.int64)
 
 
 def silhouette_pixel_counts(
@@ -75,9 +116,8 @@ def silhouette_pixel_counts(
     Returns ``(Q,)`` int64 counts of pixel centres inside the image covered by the union of the parts' hulls.
     """
     q = len(camera_index)
-    counts = np.zeros(q, dtype=np.int64)
     if not q:
-        return counts
+        return np.zeros(q, dtype=np.int64)
     n_parts = parts.shape[1]
     transforms = camera_from_world(rig, ego)
     corners = box_corners(parts[actor_index].reshape(-1, 7))  # (Q·P, 8, 3)
@@ -86,20 +126,7 @@ def silhouette_pixel_counts(
     pixels, count, _ = near_clipped_face_pixels(corners[:, BOX_FACES], pair_camera, rig)
     k = pixels.shape[1]
     valid = (np.arange(k)[None, :] < count[:, None]).reshape(q, n_parts, -1)
-    pixels = pixels.reshape(q, n_parts, -1, 2)
-    for pair in range(q):
-        camera = rig.cameras[camera_index[pair]]
-        hulls, lows, highs = [], [], []
-        for part in range(n_parts):
-            points = pixels[pair, part][valid[pair, part]]
-            equations = _hull_equations(points) if len(points) else None
-            if equations is None:
-                continue
-            hulls.append(equations)
-            lows.append(points.min(axis=0))
-            highs.append(points.max(axis=0))
-        if not hulls:
-            continue
-        low, high = np.min(lows, axis=0), np.max(highs, axis=0)
-        counts[pair] = _count_union(hulls, low, high, camera.width, camera.height)
-    return counts
+    hulls, low, high = _pair_hulls(pixels.reshape(q, n_parts, -1, 2), valid)
+    width = np.array([rig.cameras[i].width for i in camera_index], dtype=float)
+    height = np.array([rig.cameras[i].height for i in camera_index], dtype=float)
+    return _count_unions(hulls, low, high, width, height)
