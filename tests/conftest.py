@@ -1,7 +1,20 @@
-"""Shared fixtures: a small scenario that generates in about a second."""
+"""Shared fixtures: a small scenario that generates in about a second; and the suite on every core."""
 
 import pytest
 from simrig.scenarios import load_scenario
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_cmdline_main(config):
+    """Run the tests on every core, one test file per worker, when pytest-xdist is installed (the ``dev`` extra)
+    and no ``-n`` was given: ``-n 0`` runs them in this process, as ``--pdb`` does. Here rather than in
+    ``addopts``, so that pytest without xdist (a checkout installed without ``dev``) still runs the suite."""
+    if hasattr(config, "workerinput") or not config.pluginmanager.hasplugin("xdist"):
+        return
+    if config.option.numprocesses is None and not config.option.collectonly:
+        config.option.numprocesses = "auto"
+        if config.option.dist == "no":
+            config.option.dist = "loadfile"
 
 
 @pytest.fixture(scope="session")
