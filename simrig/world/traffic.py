@@ -53,6 +53,7 @@ from .ego_planner import drive_on_perception
 from .lane_memo import forget, memoise_lanes
 from .layouts import LIMIT_MARGIN_MPS, build_layout, lane_samples
 from .markings import road_markings
+from .neighbours import install as index_neighbours
 from .phantoms import phantoms_from_boxes
 from .vehicles import VEHICLE_TYPES, SimrigVehicle
 
@@ -150,6 +151,7 @@ class TrafficWorld:
         env.controlled_vehicles = [self.ego]
         self._watch = CollisionWatch(self.ego)
         self._lane_memos = memoise_lanes(road.network)
+        index_neighbours(road)
         self._watch_steps(road)
         if self._ego_on_perception:
             drive_on_perception(self.ego)
