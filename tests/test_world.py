@@ -209,3 +209,33 @@ def test_memoised_lane_coordinates_leave_every_table_as_highway_envs_own_give_th
             "files"].items()}
 
     assert hashes(tmp_path / "memo") == hashes(tmp_path / "plain")
+
+
+@pytest.mark.parametrize("name", ["highway_surround6", "merge_surround6", "roundabout_surround6"])
+def test_the_indexed_neighbour_search_answers_as_highway_envs_own_on_every_lane_of_every_step(name):
+    """:mod:`simrig.world.neighbours` against highway-env's ``Road.neighbour_vehicles``: for every vehicle, on its
+    own lane and on each lane beside it, at every step of real traffic (connected-lane search included)."""
+    from highway_env.road.road import Road
+    from simrig.scenarios import load_scenario
+
+    from simrig.seeding import RandomStreams
+    from simrig.world import TrafficWorld
+
+    scenario = load_scenario(name)
+    streams = RandomStreams(3)
+    world = TrafficWorld(scenario.traffic, scenario.frame_rate_hz, env_seed=streams.integer_seed("traffic"),
+                         rng=streams.generator("population"))
+    world.reset()
+    road = world.env.unwrapped.road
+    asked = 0
+    for _ in range(25):
+        for connected in (False, True):
+            road.neighbour_vehicles_connected_lanes = connected
+            for vehicle in list(road.vehicles):
+                for lane in [vehicle.lane_index, *road.network.side_lanes(vehicle.lane_index)]:
+                    assert road.neighbour_vehicles(vehicle, lane) == Road.neighbour_vehicles(road, vehicle, lane)
+                    asked += 1
+        road.neighbour_vehicles_connected_lanes = False
+        world.step()
+    world.close()
+    assert asked > 500
