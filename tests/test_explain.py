@@ -303,16 +303,28 @@ def test_a_game_sampled_to_a_tolerance_stops_at_the_first_round_whose_intervals_
     weight = {p: i + 1.0 for i, p in enumerate(players)}
     additive, asked = _synthetic_play(monkeypatch, lambda removed: sum(weight[p] for p in removed), players, 0.05)
     # every marginal of an additive game is the player's weight: zero spread, so the first round is within it
-    assert len(additive.orders) == FIRST_ROUND and additive.within(0.05)
+    assert len(additive.orders) == FIRST_ROUND and additive.within(0.05) and additive.beyond(0.05) == []
     assert {p: float(additive.shares[p][0]) for p in players} == weight
     assert len(asked) == len(set(asked))  # no coalition run twice
 
     def interacting(removed):  # a pair of causes that only together cost anything, plus noise-like terms
         return 10.0 * ({"a", "b"} <= removed) + sum(((ord(p) % 7) - 3) * (len(removed) % 3) for p in removed)
 
-    capped, asked = _synthetic_play(monkeypatch, interacting, players, 0.0, samples=12)
-    assert len(capped.orders) == 12 and not capped.within(0.0)  # a zero tolerance samples to the most allowed
-    assert capped.orders == sample_orders(players, 12, 5)  # the rounds' orders are --samples 12's orders
+    capped, asked = _synthetic_play(monkeypatch, interacting, players, 1e-9, samples=14)
+    assert len(capped.orders) == 14 and not capped.within(1e-9)  # a tiny tolerance samples to the most allowed
+    assert capped.orders == sample_orders(players, 14, 5)  # the rounds' orders (6, 10, 14) are --samples 14's
     assert len(asked) == len(set(asked))
     assert sum(float(capped.shares[p][0]) for p in players) == pytest.approx(interacting(frozenset(players))
                                                                            - interacting(frozenset()))
+    assert capped.beyond(1e-9) == [0]  # the one metric, named in the table's head
+
+
+@pytest.mark.parametrize(("arguments", "message"), [
+    (["--tolerance", "0"], "--tolerance: a fraction in (0, 1] of each metric's scale, got 0"),
+    (["--tolerance", "0.1", "--samples", "4"], "--tolerance needs --samples 6 or more"),
+    (["--exact", "--samples", "4"], "--exact computes every coalition: it takes no --samples or --tolerance"),
+])
+def test_a_tolerance_or_exact_asked_for_wrongly_is_one_line(run_folder, capsys, arguments, message):
+    assert main(["explain", str(run_folder), *arguments, "--quiet"]) != 0
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1

@@ -22,13 +22,15 @@ def register_explain(commands) -> None:
     explainer.add_argument("--causes", type=name_list, default=None, metavar="A,B,...",
                            help="cause groups to share among (default: every group present in the scenario)")
     explainer.add_argument("--samples", type=int_at_least(2, EXPLAIN_MAX_SAMPLES), default=None, metavar="N",
-                           help="sample N permutations (default: exact when there are at most 7 groups, else 12); "
-                                "with --tolerance, the most to sample")
+                           help="sample N permutations, rounded up to an even number (each order is paired with its "
+                                "reverse; default: exact when there are at most 7 groups, else 6); with --tolerance, "
+                                "the most to sample (default 24)")
     explainer.add_argument("--tolerance", type=partial(non_negative_float, maximum=1.0), default=None, metavar="F",
-                           help="sample permutations 4 at a time until every share's 95%% half-width is within F × "
-                                "|perfect − actual| of its metric (e.g. 0.1), or --samples are drawn")
+                           help="sample 6 permutations, then 4 more at a time, until every share's 95%% half-width is "
+                                "within F (in (0, 1], e.g. 0.1) of its metric's scale, the largest change any removal "
+                                "made to it; or until --samples are drawn")
     explainer.add_argument("--exact", action="store_true",
-                           help="every coalition of the groups (2^k counterfactual runs), however many groups")
+                           help="every coalition of the groups (2^k counterfactual runs; at most 12 groups)")
     explainer.add_argument("--engine", choices=("local", "ray"), default="local", help="where the runs go")
     explainer.add_argument("--workers", type=int_at_least(1), default=None,
                            help="processes (local; 1 runs in this process) or CPUs of a local Ray instance")

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import shlex
 import time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -57,13 +58,19 @@ EXPLAIN_FILE = "explain.json"
 """The explain folder's document, written last: a folder without it did not finish."""
 EXACT_LIMIT = 7
 """Up to this many groups the Shapley values are exact (2^7 = 128 coalitions); above, sampled."""
-DEFAULT_SAMPLES = 12
-"""Permutations sampled when the groups are too many for the exact values and ``samples`` is not given."""
+DEFAULT_SAMPLES = 6
+"""Permutations sampled when the groups are too many for the exact values and ``samples`` is not given: three
+antithetic pairs, the fewest whose interval (Student's t, 2 degrees of freedom) is not wider than the shares; on
+the default run's ten groups, 57 counterfactual runs, under a minute on two cores (``reports/perf/explain.md``)."""
+TOLERANCE_SAMPLES = 24
+"""The most permutations a game sampled to a tolerance draws when ``samples`` is not given."""
 EXACT_MAX = 12
 """Most groups ``exact=True`` (``--exact``) computes every coalition for (2^12 = 4,096 counterfactual runs)."""
-FIRST_ROUND = 4
-"""Permutations of the first round of a game sampled to a tolerance (two antithetic pairs: the fewest that give
-an interval); each further round adds as many."""
+FIRST_ROUND = 6
+"""Permutations of the first round of a game sampled to a tolerance (three antithetic pairs: with two, a count
+metric's pair means are often equal, and a zero-width interval would stop the game at once)."""
+ROUND = 4
+"""Permutations each further round of a game sampled to a tolerance adds."""
 MAX_SAMPLES = 10_000
 """Most permutations one game may sample: the orders are held in memory, and far fewer already give a
 half-width below the run-to-run noise."""
@@ -97,9 +104,9 @@ def explain(run_dir: Path | str, *, label: str | None = None, metrics: list[str]
     ``metrics``: overall metric names (3D first when the tracker has 3D tracks; ``2d:NAME``/``3d:NAME`` to
     choose); ``causes``: the groups to share among (default: every group present in the scenario — an absent
     one is a null cause, share exactly 0); ``samples``: permutations to sample (default: exact when there are
-    at most :data:`EXACT_LIMIT` groups, else :data:`DEFAULT_SAMPLES`); ``tolerance``: sample in rounds of
-    :data:`FIRST_ROUND` permutations until every share's 95 % half-width is within ``tolerance`` × |perfect −
-    actual| of its metric, or ``samples`` (default :data:`DEFAULT_SAMPLES`) are drawn; ``exact``: every
+    at most :data:`EXACT_LIMIT` groups, else :data:`DEFAULT_SAMPLES`); ``tolerance``: sample in rounds until
+    every share's 95 % half-width is within ``tolerance`` × its metric's scale (:meth:`Game.within`), or
+    ``samples`` (default :data:`TOLERANCE_SAMPLES`) are drawn; ``exact``: every
     coalition whatever the number of groups (up to :data:`EXACT_MAX`); ``engine`` ``local`` (a
     process pool of ``workers``; 1 runs in this process) or ``ray``. A run folder is data: its ``tracker.json``
     may name a registered tracker; a ``module:attribute`` there is imported only with ``trust_file`` (``--trust-file``,
@@ -151,14 +158,26 @@ class Game:
     tolerance: float | None = None
     """The stopping rule's tolerance (sampled to a tolerance), else None."""
 
-    def within(self, tolerance: float) -> bool:
-        """Whether every share's 95 % half-width is within ``tolerance`` × |perfect − actual| of its metric
-        (a metric undefined on either end is not held to it)."""
+    def scale(self) -> np.ndarray:
+        """``(M,)`` each metric's scale: the largest change any coalition run made to it (at least |perfect −
+        actual|; 0 for a metric no removal changed, NaN where it is undefined in every run)."""
+        values = np.array([result.values for result in self.results.values()], dtype=float)
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # a metric undefined in every run: NaN, not held
+            return np.nanmax(np.abs(values - self.actual), axis=0)
+
+    def beyond(self, tolerance: float) -> list[int]:
+        """The metrics (indices) with a share whose 95 % half-width is beyond ``tolerance`` × :meth:`scale`
+        (none when exact; a metric undefined in every run is not held to it)."""
         if self.half is None:
-            return True
-        gap = np.abs(self.perfect - self.actual)
-        held = np.isfinite(gap)
-        return all(bool(np.all(self.half[p][held] <= tolerance * gap[held])) for p in self.players)
+            return []
+        scale = self.scale()
+        return [m for m in range(len(scale)) if np.isfinite(scale[m]) and any(
+            not self.half[p][m] <= tolerance * scale[m] for p in self.players)]
+
+    def within(self, tolerance: float) -> bool:
+        """Whether every share's 95 % half-width is within ``tolerance`` × its metric's :meth:`scale`."""
+        return not self.beyond(tolerance)
 
     @property
     def actual(self) -> np.ndarray:
@@ -244,6 +263,11 @@ def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[
     more until :meth:`Game.within` the tolerance or ``samples`` (default :data:`DEFAULT_SAMPLES`) are drawn; the
     orders of a round start with those of the round before, so ``--samples N`` reproduces a game that stopped
     at N. ``exact``: every coalition, whatever the number of groups."""
+    if tolerance is not None and not 0 < tolerance <= 1:
+        raise ExplainError(f"--tolerance: a fraction in (0, 1] of each metric's scale, got {tolerance:g} (to sample a "
+                           "fixed number of permutations, give --samples alone)")
+    if tolerance is not None and samples is not None and samples < FIRST_ROUND:
+        raise ExplainError(f"--tolerance needs --samples {FIRST_ROUND} or more (three antithetic pairs), got {samples}")
     if exact and (samples is not None or tolerance is not None):
         raise ExplainError("--exact computes every coalition: it takes no --samples or --tolerance")
     if exact and len(players) > EXACT_MAX:
@@ -254,9 +278,7 @@ def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[
         plan = plan_game(dataset, players, samples, verdicts, exact)
         return settle(plan, _run_coalitions(plan, {}, dataset, record, chosen, scratch, engine, workers, address,
                                             progress))
-    if not (0 <= tolerance <= 1):
-        raise ExplainError(f"--tolerance: a fraction of perfect − actual in [0, 1], got {tolerance}")
-    cap, results = samples or DEFAULT_SAMPLES, {}
+    cap, results = samples or TOLERANCE_SAMPLES, {}
     count = min(cap, FIRST_ROUND)
     while True:
         plan = plan_game(dataset, players, count, verdicts)
@@ -265,7 +287,7 @@ def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[
         game = settle(plan, results, tolerance)
         if count >= cap or game.within(tolerance):
             return game
-        count = min(cap, count + FIRST_ROUND)
+        count = min(cap, count + ROUND)
 
 
 def _run_coalitions(plan: GamePlan, done: dict[Coalition, CoalitionResult], dataset: Dataset, record: dict,
@@ -433,6 +455,7 @@ def _document(scenario: str, dataset: Dataset, label: str, record: dict, chosen:
         "mode": "exact" if exact else "sampled", "samples": None if exact else len(orders),
         "tolerance": game.tolerance,
         "within_tolerance": None if game.tolerance is None else game.within(game.tolerance),
+        "beyond_tolerance": [] if game.tolerance is None else [list(chosen)[m] for m in game.beyond(game.tolerance)],
         "coalitions": len(game.results), "causes": list(players),
         "null_causes": [name for name in known if name not in present and name not in players],
         "kept_on": [name for name in present if name not in players],
@@ -517,9 +540,11 @@ def _stopping(document: dict) -> str:
     tolerance = document.get("tolerance")
     if tolerance is None:
         return ""
+    percent = f"{100 * tolerance:.3g} %"
     if document["within_tolerance"]:
-        return f", stopped with every half-width within {tolerance:.0%} of perfect − actual"
-    return f", the most allowed, before every half-width was within {tolerance:.0%} of perfect − actual"
+        return f", stopped with every half-width within {percent} of its metric's scale"
+    return (f", the most allowed, before every half-width was within {percent} of its metric's scale (still wider: "
+            f"{', '.join(document['beyond_tolerance'])})")
 
 
 def _explain_markdown(document: dict, table: str | None = None) -> str:

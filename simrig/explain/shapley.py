@@ -9,8 +9,11 @@ The game: ``u(R)`` = a vector of metric values when the cause groups ``R`` are r
 group whose removal never changes anything gets 0 (null player). Sampled: φ_i is the mean marginal
 u(P_i ∪ {i}) − u(P_i) over random orders of the groups, P_i the groups before i (Castro, Gómez and Tejada,
 "Polynomial calculation of the Shapley value based on sampling", 2009); each order is paired with its
-reverse (antithetic sampling), and the half-width of a 95 % confidence interval is given per group (Student's t
-over the pairs' means: with few pairs a normal quantile would understate it badly).
+reverse (antithetic sampling), and the half-width of a 95 % confidence interval is given per group: Student's t
+(with few pairs a normal quantile would understate it badly) over the pairs' means, or over the single orders'
+marginals where that is wider — a count metric's few pair means are often equal, which alone would claim a
+zero-width interval, and an order and its reverse usually err in opposite directions, so the single orders' interval
+is the cautious one.
 """
 
 from __future__ import annotations
@@ -108,7 +111,14 @@ def sampled_shares(players: Sequence[str], orders: Sequence[Sequence[str]],
         rows = np.array(rows)
         pairs = rows.reshape(-1, 2, *rows.shape[1:]).mean(axis=1) if len(rows) % 2 == 0 else rows
         shares[player] = rows.mean(axis=0)
-        n = len(pairs)
-        half[player] = (student_t.ppf(0.975, n - 1) * pairs.std(axis=0, ddof=1) / math.sqrt(n) if n > 1
-                        else np.full(rows.shape[1:], np.nan))  # one pair: no spread to estimate, no interval
+        if len(pairs) < 2:  # one pair: no spread to estimate, no interval
+            half[player] = np.full(rows.shape[1:], np.nan)
+            continue
+        half[player] = np.maximum(_half_width(pairs), _half_width(rows))
     return SampledShares(shares, half)
+
+
+def _half_width(samples: np.ndarray) -> np.ndarray:
+    """Half-width of the 95 % Student's t interval of the mean of ``samples`` ``(n, M)``."""
+    n = len(samples)
+    return student_t.ppf(0.975, n - 1) * samples.std(axis=0, ddof=1) / math.sqrt(n)
