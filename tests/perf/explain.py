@@ -16,6 +16,7 @@ machine's load average before and after, since the machine may be shared.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import shutil
 import time
@@ -77,12 +78,17 @@ def main() -> None:
                         help="samples=N, tolerance=F or both, comma-separated (repeatable; default: the "
                              "explainer's default mode)")
     parser.add_argument("--exact", action="store_true", help="also every coalition, and each row's error against it")
+    parser.add_argument("--exact-from", type=Path, default=None,
+                        help="the explain.json of an exact explanation of the same run (from an earlier --exact), "
+                             "instead of computing it again")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, default=Path("reports/perf/explain.md"))
     args = parser.parse_args()
     ensure_run(args.run_dir)
     rows = [(keywords, *timed(args.run_dir, args.workers, **keywords)) for keywords in args.mode or [{}]]
     exact = timed(args.run_dir, args.workers, exact=True) if args.exact else None
+    if args.exact_from:
+        exact = (json.loads(args.exact_from.read_text()), None, None, None, None)
     lines = [
         "# `simrig explain` wall time and accuracy", "",
         f"Produced by `{command_line()}` on {machine()}, {os.cpu_count()} cores (load average given: the machine "
@@ -93,7 +99,7 @@ def main() -> None:
         "| load before / after | target |",
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
-    for _, document, coalitions, wall, before, after in rows + ([(None, *exact)] if exact else []):
+    for _, document, coalitions, wall, before, after in rows + ([(None, *exact)] if exact and exact[2] else []):
         tolerance = document.get("tolerance")
         lines.append(f"| {len(document['causes'])} | {document['mode']} | "
                      f"{'-' if tolerance is None else format(tolerance, 'g')} | {document['samples'] or '-'} | "
@@ -102,7 +108,9 @@ def main() -> None:
     last = rows[-1][1]
     lines += ["", f"Groups: {', '.join(last['causes'])}.", ""]
     if exact:
-        lines += ["## Sampled shares against the exact values", "",
+        source = (f"from `{args.exact_from}`, an earlier `--exact` explanation of the same run" if args.exact_from
+                  else "computed in this run")
+        lines += ["## Sampled shares against the exact values", "", f"Exact values {source}.", "",
                   "Per row and metric: the group whose sampled share is furthest from its exact Shapley value, that "
                   "distance, the half-width the sampled table states for it, the widest half-width stated, and how "
                   "many groups' exact values lie inside their sampled 95 % intervals.", ""]
