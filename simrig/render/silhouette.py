@@ -59,9 +59,8 @@ def _box_hull_equations(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Hulls of many eight-point sets at once: ``points`` ``(H, 8, 2)`` → half-planes ``(H, E, 3)`` (unit outward
     normals, padded with :data:`NEUTRAL`) and ``(H,)`` whether the hull has any area. An edge ``i → j`` is a hull
     edge when no point lies to its right; it is the same region Qhull gives, from the same points."""
-    d = points[:, None, :, :] - points[:, :, None, :]  # (H, i, j, 2): p_j − p_i
-    r = points[:, None, :, :] - points[:, :, None, :]  # (H, i, k, 2): p_k − p_i
-    cross = d[:, :, :, None, 0] * r[:, :, None, :, 1] - d[:, :, :, None, 1] * r[:, :, None, :, 0]  # (H, i, j, k)
+    d = points[:, None, :, :] - points[:, :, None, :]  # (H, i, j, 2): p_j − p_i (and, read as (H, i, k), p_k − p_i)
+    cross = d[:, :, :, None, 0] * d[:, :, None, :, 1] - d[:, :, :, None, 1] * d[:, :, None, :, 0]  # (H, i, j, k)
     length = np.hypot(d[..., 0], d[..., 1])
     edge = (cross >= 0.0).all(axis=3) & (length > 0.0)
     has_area = edge.any(axis=(1, 2)) & (cross != 0.0).any(axis=(1, 2, 3))  # not every point on one line
