@@ -17,6 +17,20 @@ def pytest_cmdline_main(config):
             config.option.dist = "loadfile"
 
 
+@pytest.fixture(autouse=True)
+def _tracker_registry_as_the_suite_found_it():
+    """Each test sees the tracker registry as it was before the test: a tracker one test registers does not leak
+    into the next (with the suite spread over workers, which tests share a process changes from run to run)."""
+    from simrig.trackers import registry
+
+    tables = (registry._FACTORIES, registry._LAZY, registry._REGISTERED_HERE)
+    saved = [dict(table) for table in tables]
+    yield
+    for table, before in zip(tables, saved, strict=True):
+        table.clear()
+        table.update(before)
+
+
 @pytest.fixture(scope="session")
 def small_scenario(tmp_path_factory):
     """highway_surround6 with 15 vehicles in a 100 m window: the default rig, quick to run."""
