@@ -32,6 +32,34 @@ def _tracker_registry_as_the_suite_found_it():
 
 
 @pytest.fixture(scope="session")
+def release_build(tmp_path_factory):
+    """This checkout built once as a release is (``python -m build``: the sdist, then the wheel from the sdist),
+    shared by every test and worker of the session: ``(wheel, sdist)``. Built under a lock, because setuptools
+    writes into the source tree (its ``*.egg-info``) and two builds of one tree at once break each other."""
+    import fcntl
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    pytest.importorskip("build")
+    shared = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        shared = shared.parent  # the session's folder, above each worker's own
+    out = shared / "release-build"
+    repository = Path(__file__).resolve().parents[1]
+    with open(shared / "release-build.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (out / "done").exists():
+            subprocess.run([sys.executable, "-m", "build", "--outdir", str(out), str(repository)], check=True,
+                           capture_output=True, timeout=900)
+            (out / "done").write_text("")
+    (wheel,) = out.glob("simrig_mot-*.whl")
+    (sdist,) = out.glob("simrig_mot-*.tar.gz")
+    return wheel, sdist
+
+
+@pytest.fixture(scope="session")
 def small_scenario(tmp_path_factory):
     """highway_surround6 with 15 vehicles in a 100 m window: the default rig, quick to run."""
     path = tmp_path_factory.mktemp("scenario") / "small.toml"

@@ -12,8 +12,6 @@ from pathlib import Path
 
 import pytest
 
-REPOSITORY = Path(__file__).resolve().parents[1]
-
 USER_FILES = {
     "tracker.py": 'WHO = "the user\'s tracker.py"\n',
     "tracker/__init__.py": 'WHO = "the user\'s tracker package"\n',
@@ -54,16 +52,14 @@ USER_FILES = {
 
 
 @pytest.mark.slow
-def test_a_user_project_with_its_own_tracker_and_scenarios_modules(tmp_path: Path) -> None:
+def test_a_user_project_with_its_own_tracker_and_scenarios_modules(tmp_path: Path, release_build) -> None:
     venv = tmp_path / "venv"
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
     python = str(venv / "bin" / "python")
-    wheels = tmp_path / "wheels"
-    subprocess.run([python, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(wheels), str(REPOSITORY)],
-                   check=True, timeout=600, capture_output=True)
-    (wheel,) = wheels.glob("simrig_mot-*.whl")
-    subprocess.run([python, "-m", "pip", "install", "-q", f"{wheel}[testing]", "pytest"], check=True,
-                   timeout=1500, capture_output=True)
+    wheel, _ = release_build
+    install = subprocess.run([python, "-m", "pip", "install", "-q", f"{wheel}[testing]", "pytest"],
+                             timeout=1500, capture_output=True, text=True)
+    assert install.returncode == 0, install.stderr[-3000:]
     project = tmp_path / "project"
     for name, text in USER_FILES.items():
         (project / name).parent.mkdir(parents=True, exist_ok=True)
