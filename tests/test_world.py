@@ -239,3 +239,73 @@ def test_the_indexed_neighbour_search_answers_as_highway_envs_own_on_every_lane_
         world.step()
     world.close()
     assert asked > 500
+
+
+def test_the_road_step_collides_exactly_the_pairs_highway_envs_own_step_collides(monkeypatch):
+    """:mod:`simrig.world.road_step` against highway-env's ``Road.step`` on one crowded road, deep-copied: highway-env's
+    vehicles (whose spherical test reaches ``speed · dt`` further) and simrig's, an obstacle, pairs overlapping,
+    pairs just inside and just outside the spherical test's reach, pairs placed at exactly that reach. Every pair
+    that passes highway-env's spherical test (``norm(Δposition) ≤ (diagonal₁ + diagonal₂) / 2 + speed₁ · dt``,
+    its own formula) gets the exact test on simrig's road too, and after every step each vehicle's position, crash
+    flag and impact are the same on both roads, with crashes and impacts happening."""
+    import copy
+
+    from highway_env.road.lane import StraightLane
+    from highway_env.road.road import Road, RoadNetwork
+    from highway_env.vehicle.kinematics import Vehicle
+    from highway_env.vehicle.objects import Obstacle, RoadObject
+
+    from simrig.world.road_step import step_road
+
+    network = RoadNetwork()
+    for lane in range(3):
+        network.add_lane("a", "b", StraightLane([0.0, 4.0 * lane], [1000.0, 4.0 * lane]))
+    road = Road(network=network, np_random=np.random.default_rng(0))
+    rng = np.random.default_rng(7)
+    kinds = (IDMVehicle, SimrigVehicle)
+    for index in range(36):
+        lane = network.get_lane(("a", "b", index % 3))
+        road.vehicles.append(kinds[index % 2](road, lane.position(float(rng.uniform(0.0, 120.0)), 0.0),
+                                              speed=float(rng.uniform(5.0, 30.0))))
+    anchor = Vehicle(road, np.array([500.0, 30.0]), speed=0.0)  # standing still: the edge pairs stay at the edge
+    road.vehicles.append(anchor)
+    for along in (0.0, -1e-9, 1e-9):  # at the sphere's edge, just inside it and just outside it
+        other = Vehicle(road, anchor.position.copy(), speed=0.0)
+        other.position = anchor.position + np.array([0.0, (anchor.diagonal + other.diagonal) / 2.0 + along])
+        road.vehicles.append(other)
+    road.objects.append(Obstacle(road, network.get_lane(("a", "b", 1)).position(60.0, 0.0)))
+    theirs = copy.deepcopy(road)
+
+    checked: list = []
+    exact_test = RoadObject._is_colliding
+
+    def recording(self, other, dt):
+        checked.append((self, other, dt))
+        return exact_test(self, other, dt)
+
+    monkeypatch.setattr(RoadObject, "_is_colliding", recording)
+
+    def pairs(on, within_sphere: bool) -> set:
+        index = {id(thing): k for k, thing in enumerate(on.vehicles + on.objects)}
+        return {(index[id(a)], index[id(b)]) for a, b, dt in checked if not within_sphere
+                or np.linalg.norm(b.position - a.position) <= (a.diagonal + b.diagonal) / 2 + a.speed * dt}
+
+    crashes = impacts = 0
+    for _ in range(20):
+        road.act()
+        theirs.act()
+        checked.clear()
+        Road.step(theirs, 1 / 15)
+        needed = pairs(theirs, within_sphere=True)
+        checked.clear()
+        step_road(road, 1 / 15)
+        assert needed <= pairs(road, within_sphere=False)
+        assert {(36, 37), (36, 38)} <= needed and (36, 39) not in needed  # the edge pairs, as placed
+        for mine, their in zip(road.vehicles, theirs.vehicles, strict=True):
+            assert np.array_equal(mine.position, their.position)
+            assert (mine.crashed, mine.hit) == (their.crashed, their.hit)
+            assert (mine.impact is None) == (their.impact is None)
+            assert mine.impact is None or np.array_equal(mine.impact, their.impact)
+        crashes += sum(v.crashed for v in road.vehicles)
+        impacts += sum(v.impact is not None and np.any(v.impact) for v in road.vehicles)
+    assert crashes > 0 and impacts > 0

@@ -23,6 +23,8 @@ from highway_env.vehicle.objects import Obstacle
 
 from simrig.scenarios.layout_schema import CrossingsLayout, ExitsLayout, RampsLayout, TwoWayLayout
 
+from .road_step import step_road
+
 LANE_WIDTH_M = StraightLane.DEFAULT_WIDTH
 RAMP_APPROACH_M = 100.0
 """[m] straight part of an on-ramp, beside the road."""
@@ -310,7 +312,7 @@ class CrossingRoad(Road):
 
     def step(self, dt: float) -> None:
         self._give_way()
-        super().step(dt)
+        step_road(self, dt)
 
     def _give_way(self) -> None:
         main = [v for v in self.vehicles if not str(v.lane_index[0]).startswith(("north_", "south_"))]

@@ -12,6 +12,7 @@ vehicles, ties included, and datasets keep their bytes.
 
 from __future__ import annotations
 
+import numpy as np
 from highway_env.vehicle.objects import Landmark
 
 
@@ -20,17 +21,23 @@ class NeighbourSearch:
 
     def __init__(self, road):
         self.road = road
-        self._arrangement: tuple = ()
+        self._things: list = []
+        self._members: tuple = ()
         self._candidates: list = []
+        self._positions = np.zeros(0)
         self._tables: dict[int, tuple[object, list]] = {}
 
     def _current(self) -> list:
         """The vehicles and objects searched (landmarks left out, as highway-env does), the lane tables emptied
-        when any of them moved or the list changed."""
-        candidates = [v for v in self.road.vehicles + self.road.objects if not isinstance(v, Landmark)]
-        arrangement = tuple((id(v), float(v.position[0]), float(v.position[1])) for v in candidates)
-        if arrangement != self._arrangement:
-            self._arrangement, self._candidates, self._tables = arrangement, candidates, {}
+        when any of them moved (an exact comparison of every position) or the lists changed."""
+        things = self.road.vehicles + self.road.objects
+        members = tuple(map(id, things))
+        if members != self._members:  # ``_things`` keeps every member alive, so no id is reused while compared
+            self._things, self._members, self._tables = things, members, {}
+            self._candidates = [v for v in things if not isinstance(v, Landmark)]
+        positions = np.concatenate([v.position for v in self._candidates]) if self._candidates else np.zeros(0)
+        if not np.array_equal(positions, self._positions):
+            self._positions, self._tables = positions, {}
         return self._candidates
 
     def _table(self, lane) -> list:

@@ -51,10 +51,11 @@ from ..types import EGO_ID, ActorClass, Collision, EgoPose, GroundTruthFrame
 from .collisions import CollisionWatch
 from .ego_planner import drive_on_perception
 from .lane_memo import forget, memoise_lanes
-from .layouts import LIMIT_MARGIN_MPS, build_layout, lane_samples
+from .layouts import LIMIT_MARGIN_MPS, CrossingRoad, build_layout, lane_samples
 from .markings import road_markings
 from .neighbours import install as index_neighbours
 from .phantoms import phantoms_from_boxes
+from .road_step import step_road
 from .vehicles import VEHICLE_TYPES, SimrigVehicle
 
 SPAWN_CLEARANCE_M = 10.0
@@ -253,7 +254,8 @@ class TrafficWorld:
     def _watch_steps(self, road) -> None:
         """Check for collisions after every simulation step of ``road`` (highway-env steps it
         ``simulation_substeps`` times a frame): the ego and what it touched freeze at that step."""
-        step, watch = road.step, self._watch
+        step = road.step if isinstance(road, CrossingRoad) else (lambda dt: step_road(road, dt))
+        watch = self._watch
 
         def watched_step(dt: float) -> None:
             watch.before_step(road)
