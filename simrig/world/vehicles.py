@@ -185,13 +185,13 @@ class SimrigVehicle(IDMVehicle):
         lane_heading = lane.heading_at(along)
         curvature = utils.wrap_to_pi(lane.heading_at(along + CURVATURE_STEP_M) - lane_heading) / CURVATURE_STEP_M
         speed = max(abs(self.speed), 0.1)
-        lateral_speed = np.clip(-lateral / TAU_LATERAL_S, -LATERAL_SPEED_MPS, LATERAL_SPEED_MPS)
-        heading_ref = lane_heading + np.arcsin(np.clip(lateral_speed / speed, -np.sin(np.pi / 4), np.sin(np.pi / 4)))
+        lateral_speed = _clip(-lateral / TAU_LATERAL_S, -LATERAL_SPEED_MPS, LATERAL_SPEED_MPS)
+        heading_ref = lane_heading + np.arcsin(_clip(lateral_speed / speed, -_SIN_45, _SIN_45))
         bound = min(STEERING_LATERAL_ACCELERATION_MPS2 / speed, YAW_RATE_MAX)
-        correction = np.clip(utils.wrap_to_pi(heading_ref - self.heading) / TAU_HEADING_S, -bound, bound)
+        correction = _clip(utils.wrap_to_pi(heading_ref - self.heading) / TAU_HEADING_S, -bound, bound)
         yaw_rate = self.speed * curvature + correction
-        slip = np.arcsin(np.clip(self.LENGTH / 2 / utils.not_zero(self.speed) * yaw_rate, -1, 1))
-        return float(np.clip(np.arctan(2 * np.tan(slip)), -self.MAX_STEERING_ANGLE, self.MAX_STEERING_ANGLE))
+        slip = np.arcsin(_clip(self.LENGTH / 2 / utils.not_zero(self.speed) * yaw_rate, -1, 1))
+        return float(_clip(np.arctan(2 * np.tan(slip)), -self.MAX_STEERING_ANGLE, self.MAX_STEERING_ANGLE))
 
     def freeze(self) -> None:
         """Stand still from now on where the vehicle is (after a collision): speed 0, no acceleration, no steering,
@@ -220,6 +220,15 @@ class SimrigVehicle(IDMVehicle):
         else:
             dv = ego_vehicle.speed - front_vehicle.speed
         return JAM_GAP_M + bumpers + ego_vehicle.speed * self.TIME_WANTED + ego_vehicle.speed * dv / (2 * np.sqrt(ab))
+
+
+_SIN_45 = float(np.sin(np.pi / 4))
+
+
+def _clip(value: float, low: float, high: float) -> float:
+    """``np.clip`` of one number, the same value (NaN stays NaN) without numpy's per-call cost: the steering law
+    runs for every vehicle at every simulation step."""
+    return min(max(value, low), high)
 
 
 def _vehicle_type(actor_class: ActorClass) -> type[SimrigVehicle]:
