@@ -309,3 +309,31 @@ def test_the_road_step_collides_exactly_the_pairs_highway_envs_own_step_collides
         crashes += sum(v.crashed for v in road.vehicles)
         impacts += sum(v.impact is not None and np.any(v.impact) for v in road.vehicles)
     assert crashes > 0 and impacts > 0
+
+
+@pytest.mark.parametrize("name", ["highway_surround6", "intersection_surround6"])
+def test_a_dataset_stepped_by_the_road_step_has_the_bytes_of_one_stepped_by_highway_envs_own(name, tmp_path,
+                                                                                         monkeypatch):
+    """The same, end to end: a dataset (crossings and their give-way rule included) made with
+    :func:`~simrig.world.road_step.step_road` has the same bytes as one made with highway-env's ``Road.step``."""
+    import json
+
+    from highway_env.road.road import Road
+    from simrig.scenarios import load_scenario
+    from simrig.scenarios.overrides import with_setting
+
+    import simrig.world.layouts as layouts
+    import simrig.world.traffic as traffic
+    from simrig.pipeline.generate import generate
+
+    scenario = with_setting(load_scenario(name), "render.visibility", False)
+    generate(scenario, seed=4, out=tmp_path / "ours", frames=60)
+    for module in (traffic, layouts):
+        monkeypatch.setattr(module, "step_road", Road.step)
+    generate(scenario, seed=4, out=tmp_path / "theirs", frames=60)
+
+    def hashes(folder):
+        return {name: entry["sha256"] for name, entry in json.loads((folder / "manifest.json").read_text())[
+            "files"].items()}
+
+    assert hashes(tmp_path / "ours") == hashes(tmp_path / "theirs")
