@@ -34,6 +34,23 @@ def test_a_name_cannot_be_taken_twice_and_a_factory_must_build_a_tracker():
         tracker.create("test-bad")
 
 
+def test_registering_the_name_of_an_installed_packages_tracker_is_an_error_unless_replacing(monkeypatch):
+    """A package's entry point (group ``simrig.trackers``) takes its name even before anything asked for the list
+    of trackers: a later ``register`` of that name fails instead of shadowing it, unless it says ``replace``."""
+    from importlib import metadata
+
+    from simrig.trackers import registry
+
+    installed = metadata.EntryPoint("test-installed", f"{__name__}:_Still", registry.ENTRY_POINT_GROUP)
+    monkeypatch.setattr(registry.metadata, "entry_points",
+                        lambda group: [installed] if group == registry.ENTRY_POINT_GROUP else [])
+    with pytest.raises(ValueError, match="'test-installed' is already registered"):
+        tracker.register("test-installed", lambda: _Still())
+    replacement = lambda: _Still()  # noqa: E731
+    tracker.register("test-installed", replacement, replace=True)
+    assert registry._factory("test-installed") is replacement
+
+
 def test_building_one_tracker_imports_no_other():
     """Trackers are imported when first asked for: a ``saga`` run pays for no other tracker's modules (nor what
     they import); listing the trackers imports none."""
