@@ -46,6 +46,7 @@ def test_registering_the_name_of_an_installed_packages_tracker_is_an_error_unles
                         lambda group: [installed] if group == registry.ENTRY_POINT_GROUP else [])
     with pytest.raises(ValueError, match="'test-installed' is already registered"):
         tracker.register("test-installed", lambda: _Still())
+    tracker.register("test-installed", _Still)  # the factory the entry point names: no conflict
     replacement = lambda: _Still()  # noqa: E731
     tracker.register("test-installed", replacement, replace=True)
     assert registry._factory("test-installed") is replacement

@@ -29,12 +29,14 @@ _REGISTERED_HERE: dict[str, str] = {}
 
 
 def register(name: str, factory: Callable[..., Tracker], *, replace: bool = False) -> None:
-    """Make ``factory(**params)`` available as tracker ``name``; registering a taken name (simrig's own, another
-    registration, or an installed package's entry point) is an error unless ``replace``."""
+    """Make ``factory(**params)`` available as tracker ``name``; registering a name another factory holds (one of
+    simrig's own, another registration, or an installed package's entry point) is an error unless ``replace``;
+    registering the same factory again is not."""
     if not name or not isinstance(name, str):
         raise ValueError(f"tracker name must be a non-empty string, got {name!r}")
     _load_entry_points()  # an installed package's tracker of that name is taken too, not silently shadowed
-    if name in _LAZY and not replace:
+    reference = f"{getattr(factory, '__module__', '')}:{getattr(factory, '__qualname__', '')}"
+    if name in _LAZY and not replace and _LAZY[name] != reference:  # the same factory again is no conflict
         raise ValueError(f"tracker {name!r} is already registered")
     if name in _FACTORIES and not replace and _FACTORIES[name] is not factory:
         raise ValueError(f"tracker {name!r} is already registered")
