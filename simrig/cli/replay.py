@@ -26,6 +26,8 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     params = tracker_params(args.param) if args.param else None
     result = replay(args.file, tracker=args.tracker, params=params, out=args.out, trust_file=args.trust_file)
     print(result.report.table())
+    if args.out is None:
+        print("\n(the dataset and tracks above were in a temporary folder, now removed; --out DIR keeps them)")
     print()
     print(result.summary())
     return 0 if result.reproduced else 1
