@@ -118,6 +118,8 @@ def describe_errors(error: ValidationError, labels: dict[tuple, str] | None = No
     """One line per pydantic error folded into one line: 'key.path: message' (the first
     :data:`MAX_ERRORS_LISTED`, then how many more). ``labels`` name a key's leading parts in full (a space's
     ``("dimensions", 0)`` as ``dimensions.0 (traffic.vehicles)``: :func:`dimension_labels`)."""
+    from .key_hints import known_keys, nearest  # only on an error: pydantic's models are not loaded for --help
+
     parts = []
     items = error.errors()
     for item in items[:MAX_ERRORS_LISTED]:
@@ -127,7 +129,13 @@ def describe_errors(error: ValidationError, labels: dict[tuple, str] | None = No
         key = ".".join(names) or "(top level)"
         message = item["msg"]
         if item["type"] == "extra_forbidden":
-            message = "unknown key"
+            message = "unknown key" + nearest(str(loc[-1]), known_keys(error.title, loc[:-1])) if loc else "unknown key"
+        elif item["type"] == "union_tag_invalid":  # a tagged table whose tag ('kind') names no known kind
+            context = item["ctx"]
+            tag, field = str(context["tag"]), str(context["discriminator"]).strip("'")
+            expected = [name.strip().strip("'") for name in str(context["expected_tags"]).split(",")]
+            key = f"{key}.{field}" if key != "(top level)" else field
+            message = f"unknown {field} {tag!r}{nearest(tag, expected)}; known: {context['expected_tags']}"
         elif message.startswith("Value error, "):
             message = message.removeprefix("Value error, ")
             named = _NAMED_MESSAGE.match(message)

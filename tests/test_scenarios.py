@@ -54,6 +54,15 @@ def test_extends_overrides_only_what_it_changes(tmp_path):
          ["traffic.layout.crossings", "side_share + oncoming_share: 0.7 + 0.5 exceeds 1"]),
         ('[traffic]\nlayout = { kind = "exits", ramp_share = 0.1 }\n',
          ["traffic.layout.exits.ramp_share", "unknown key"]),
+        # a misspelt key or kind: the nearest name the table accepts is offered
+        ('extends = "highway_surround6"\n[traffic]\nvehicels = 25\n',
+         ["traffic.vehicels: unknown key (did you mean 'vehicles'?)"]),
+        ('extends = "highway_surround6"\nframse = 5\n', ["framse: unknown key (did you mean 'frames'?)"]),
+        ('extends = "highway_surround6"\n[[perturbations]]\nkind = "occlude"\nframes = [1, 5]\nactor = 3\n',
+         ["perturbations.0.occlude.actor: unknown key (did you mean 'actors'?)"]),
+        ('extends = "highway_surround6"\n[[perturbations]]\nkind = "ocllude"\nframes = [1, 5]\n',
+         ["perturbations.0.kind: unknown kind 'ocllude' (did you mean 'occlude'?); known: 'occlude', 'miss_burst'"]),
+        ('extends = "highway_surround6"\n[traffic]\nzebra = 1\n', ["traffic.zebra: unknown key"]),
     ],
 )
 def test_bad_scenarios_give_one_line_naming_file_and_key(tmp_path, text, fragments):
@@ -65,6 +74,8 @@ def test_bad_scenarios_give_one_line_naming_file_and_key(tmp_path, text, fragmen
     assert str(path) in message
     for fragment in fragments:
         assert fragment in message
+    if "zebra" in text:  # nothing near it: no hint
+        assert "did you mean" not in message
 
 
 def test_unknown_catalog_name_lists_the_catalog():
