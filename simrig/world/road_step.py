@@ -34,6 +34,7 @@ def step_road(road, dt: float) -> None:
     gaps = positions[None, :, :] - positions[:n, None, :]
     reach = half_diagonals[:n, None] + half_diagonals[None, :] + travel[:, None] + MARGIN_M
     later = np.arange(len(everything))[None, :] > np.arange(n)[:, None]  # later vehicles, then every object
-    first, second = np.nonzero(later & (np.hypot(gaps[..., 0], gaps[..., 1]) <= reach))  # row-major: the loop order
+    apart = np.hypot(gaps[..., 0], gaps[..., 1]) > reach  # highway-env's own comparison: a NaN is never apart
+    first, second = np.nonzero(later & ~apart)  # row-major: highway-env's loop order
     for i, j in zip(first.tolist(), second.tolist(), strict=True):
         vehicles[i].handle_collisions(everything[j], dt)
