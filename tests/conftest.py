@@ -59,6 +59,22 @@ def release_build(tmp_path_factory):
     return wheel, sdist
 
 
+@pytest.fixture
+def venv_with_release(tmp_path, release_build) -> str:
+    """The Python of a new virtual environment under ``tmp_path`` holding nothing but ``pip install
+    simrig-mot[testing] pytest`` from :func:`release_build`'s wheel (pip's message shown if it fails)."""
+    import subprocess
+    import sys
+
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+    python = str(venv / "bin" / "python")
+    install = subprocess.run([python, "-m", "pip", "install", "-q", f"{release_build[0]}[testing]", "pytest"],
+                             timeout=1500, capture_output=True, text=True)
+    assert install.returncode == 0, install.stderr[-3000:]
+    return python
+
+
 @pytest.fixture(scope="session")
 def small_scenario(tmp_path_factory):
     """highway_surround6 with 15 vehicles in a 100 m window: the default rig, quick to run."""

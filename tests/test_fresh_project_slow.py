@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import os
 import subprocess
-import sys
 import textwrap
 from pathlib import Path
 
@@ -52,14 +51,8 @@ USER_FILES = {
 
 
 @pytest.mark.slow
-def test_a_user_project_with_its_own_tracker_and_scenarios_modules(tmp_path: Path, release_build) -> None:
-    venv = tmp_path / "venv"
-    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
-    python = str(venv / "bin" / "python")
-    wheel, _ = release_build
-    install = subprocess.run([python, "-m", "pip", "install", "-q", f"{wheel}[testing]", "pytest"],
-                             timeout=1500, capture_output=True, text=True)
-    assert install.returncode == 0, install.stderr[-3000:]
+def test_a_user_project_with_its_own_tracker_and_scenarios_modules(tmp_path: Path, venv_with_release) -> None:
+    python = venv_with_release
     project = tmp_path / "project"
     for name, text in USER_FILES.items():
         (project / name).parent.mkdir(parents=True, exist_ok=True)

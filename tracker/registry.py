@@ -35,16 +35,15 @@ def register(name: str, factory: Callable[..., Tracker], *, replace: bool = Fals
     if not name or not isinstance(name, str):
         raise ValueError(f"tracker name must be a non-empty string, got {name!r}")
     _load_entry_points()  # an installed package's tracker of that name is taken too, not silently shadowed
-    reference = f"{getattr(factory, '__module__', '')}:{getattr(factory, '__qualname__', '')}"
+    reference = f"{getattr(factory, '__module__', None) or ''}:{getattr(factory, '__qualname__', '')}"
     if name in _LAZY and not replace and _LAZY[name] != reference:  # the same factory again is no conflict
         raise ValueError(f"tracker {name!r} is already registered")
     if name in _FACTORIES and not replace and _FACTORIES[name] is not factory:
         raise ValueError(f"tracker {name!r} is already registered")
     _LAZY.pop(name, None)
     _FACTORIES[name] = factory
-    module = getattr(factory, "__module__", None) or ""
-    if not module.startswith(__name__.rpartition(".")[0] + "."):  # a user's tracker, not one of simrig's
-        _REGISTERED_HERE[name] = f"{module}:{getattr(factory, '__qualname__', '')}"
+    if not reference.startswith(__name__.rpartition(".")[0] + "."):  # a user's tracker, not one of simrig's
+        _REGISTERED_HERE[name] = reference
 
 
 def register_lazily(name: str, reference: str) -> None:
