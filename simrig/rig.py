@@ -20,10 +20,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-
-from simrig.scenarios.schema import RigConfig
+from typing import TYPE_CHECKING
 
 from .types import Camera, Rig
+
+if TYPE_CHECKING:
+    from simrig.scenarios.schema import RigConfig
 
 SURROUND6_LAYOUT: tuple[tuple[str, float, float, float], ...] = (
     # name, yaw [deg], x [m], y [m] on the ego (origin: centre of the footprint)

@@ -229,6 +229,18 @@ def test_the_front_door_score_loads_no_tracker(small_dataset, saga_tracks):
     assert done.stdout.strip() == "[]"
 
 
+def test_opening_a_dataset_and_reading_its_truth_loads_no_scenario_schema(small_dataset):
+    """The dataset records its rig as data: reading it needs no scenario validation (pydantic, ~0.1 s)."""
+    code = ("import sys, simrig\n"
+            f"d = simrig.open_dataset({str(small_dataset.path)!r})\n"
+            "d.rig, d.ground_truth\n"
+            "print(sorted(m for m in sys.modules\n"
+            "             if m.split('.')[0] == 'pydantic' or m.startswith('simrig.') and m.endswith('schema')))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip() == "[]"
+
+
 class Still:
     """A tracker class that reports nothing."""
 
