@@ -5,6 +5,11 @@ class SimrigError(Exception):
     """Base class of every error simrig reports to a user (the CLI prints the message alone)."""
 
 
+class OptionError(SimrigError):
+    """An option's value, or a combination of options, is not valid; the message starts with the option
+    (``--samples: ...``). The command line adds where its options are described."""
+
+
 class DatasetError(SimrigError):
     """A dataset folder is missing, incomplete, corrupt, or would be overwritten."""
 

@@ -173,6 +173,7 @@ def test_bad_cause_or_metric_is_one_line(run_folder, capsys, arguments, message)
     assert main(["explain", str(run_folder), *arguments]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"simrig: error: {message}") and err.count("\n") == 1
+    assert err.endswith(" (see 'simrig explain --help')\n")  # an option's error says where options are described
 
 
 def test_a_file_given_as_the_run_folder_is_called_a_file(tmp_path, capsys):
@@ -180,6 +181,7 @@ def test_a_file_given_as_the_run_folder_is_called_a_file(tmp_path, capsys):
     assert main(["explain", str(tmp_path / "my_scenario.toml")]) == 2
     err = capsys.readouterr().err
     assert "my_scenario.toml' is a file; give the folder of a 'simrig run'" in err and err.count("\n") == 1
+    assert "--help" not in err  # not an option's error: no pointer to the options
 
 
 def test_a_run_folder_without_tracks_is_one_line(tmp_path, run_folder, capsys):
@@ -328,3 +330,4 @@ def test_a_tolerance_or_exact_asked_for_wrongly_is_one_line(run_folder, capsys, 
     assert main(["explain", str(run_folder), *arguments, "--quiet"]) != 0
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert err.endswith(" (see 'simrig explain --help')\n")

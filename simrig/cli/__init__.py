@@ -18,7 +18,7 @@ import sys  # noqa: E402
 
 from simrig.scenarios import ScenarioError  # noqa: E402
 
-from ..errors import SimrigError  # noqa: E402
+from ..errors import OptionError, SimrigError  # noqa: E402
 from ..interrupts import interrupted, noting_interrupts  # noqa: E402
 from .arguments import OneLineParser  # noqa: E402
 from .bench import register_bench, register_report  # noqa: E402
@@ -82,7 +82,8 @@ def main(argv: list[str] | None = None) -> int:
                     import traceback
 
                     traceback.print_exception(error.__cause__, file=sys.stderr)
-                print(f"simrig: error: {_one_line(str(error))}", file=sys.stderr)
+                hint = f" (see 'simrig {args.command} --help')" if isinstance(error, OptionError) else ""
+                print(f"simrig: error: {_one_line(str(error))}{hint}", file=sys.stderr)
                 return 2
             if isinstance(error, BrokenPipeError):  # the reader left early: console() leaves quietly
                 raise

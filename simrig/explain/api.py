@@ -30,7 +30,7 @@ from simrig.dataset import Dataset
 from simrig.dataset.manifest import write_json_atomic
 from simrig.dataset.outputs import atomic_file, write_text_atomic
 from simrig.dataset.run_folder import DATASET_DIR, EXPLAIN_DIR, REPORT, SCORES_DIR, TRACKER_RECORD, TRACKS_DIR
-from simrig.errors import SimrigError
+from simrig.errors import OptionError, SimrigError
 from simrig.pipeline.guard import FRAME_TIME_LIMIT_S
 from simrig.pipeline.track import TrackingError, build_tracker
 from simrig.pipeline.trust import TrackerReferenceError, check_file_reference
@@ -81,6 +81,10 @@ DEFAULT_METRICS_2D = ("HOTA", "IDSW", "CLR_FN", "Frag")
 
 class ExplainError(SimrigError):
     """``simrig explain`` cannot run: the message names the folder, record, cause or metric."""
+
+
+class ExplainOptionError(ExplainError, OptionError):
+    """An option of ``simrig explain`` (or a combination of them) is not valid: the message starts with it."""
 
 
 @dataclass(frozen=True)
@@ -221,9 +225,10 @@ def plan_game(dataset: Dataset, players: tuple[str, ...], samples: int | None, v
     permutations drawn from the dataset's seed (the same for every tracker of one dataset); ``exact``: all 2^k
     whatever k. ``verdicts``: also each single removal, and the error keys of those and of the actual run."""
     if samples is not None and samples < 2:
-        raise ExplainError(f"--samples: at least 2 permutations (an order and its reverse) are needed, got {samples}")
+        raise ExplainOptionError(f"--samples: at least 2 permutations (an order and its reverse) are needed, "
+                                 f"got {samples}")
     if samples is not None and samples > MAX_SAMPLES:
-        raise ExplainError(f"--samples: at most {MAX_SAMPLES:,} permutations, got {samples:,}")
+        raise ExplainOptionError(f"--samples: at most {MAX_SAMPLES:,} permutations, got {samples:,}")
     exact = samples is None and (exact or len(players) <= EXACT_LIMIT)
     orders = None if exact else sample_orders(players, samples or DEFAULT_SAMPLES, dataset.seed)
     singles = {frozenset({p}) for p in players} if verdicts else set()
@@ -264,15 +269,16 @@ def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[
     orders of a round start with those of the round before, so ``--samples N`` reproduces a game that stopped
     at N. ``exact``: every coalition, whatever the number of groups."""
     if tolerance is not None and not 0 < tolerance <= 1:
-        raise ExplainError(f"--tolerance: a fraction in (0, 1] of each metric's scale, got {tolerance:g} (to sample a "
-                           "fixed number of permutations, give --samples alone)")
+        raise ExplainOptionError(f"--tolerance: a fraction in (0, 1] of each metric's scale, got {tolerance:g} "
+                                 "(to sample a fixed number of permutations, give --samples alone)")
     if tolerance is not None and samples is not None and samples < FIRST_ROUND:
-        raise ExplainError(f"--tolerance needs --samples {FIRST_ROUND} or more (three antithetic pairs), got {samples}")
+        raise ExplainOptionError(f"--tolerance needs --samples {FIRST_ROUND} or more (three antithetic pairs), "
+                                 f"got {samples}")
     if exact and (samples is not None or tolerance is not None):
-        raise ExplainError("--exact computes every coalition: it takes no --samples or --tolerance")
+        raise ExplainOptionError("--exact computes every coalition: it takes no --samples or --tolerance")
     if exact and len(players) > EXACT_MAX:
-        raise ExplainError(f"--exact: {len(players)} groups would be {2 ** len(players):,} counterfactual runs; at "
-                           f"most {EXACT_MAX} groups (choose them with --causes), or sample")
+        raise ExplainOptionError(f"--exact: {len(players)} groups would be {2 ** len(players):,} counterfactual "
+                                 f"runs; at most {EXACT_MAX} groups (choose them with --causes), or sample")
     exact = exact or samples is None and len(players) <= EXACT_LIMIT
     if tolerance is None or exact:
         plan = plan_game(dataset, players, samples, verdicts, exact)
@@ -322,7 +328,7 @@ def _players(causes: list[str] | None, known: tuple[str, ...], present: tuple[st
         return present
     unknown = [name for name in causes if name not in known]
     if unknown:
-        raise ExplainError(f"--causes: unknown cause group {unknown[0]!r}; {scenario!r} has: {', '.join(known)}")
+        raise ExplainOptionError(f"--causes: unknown cause group {unknown[0]!r}; {scenario!r} has: {', '.join(known)}")
     return tuple(dict.fromkeys(causes))
 
 
@@ -394,7 +400,7 @@ def choose_metrics(names: list[str] | None, has_3d: bool) -> dict[str, tuple[str
         elif not dimension and bare in METRICS_2D:
             chosen[name] = ("2d", bare)
         else:
-            raise ExplainError(f"--metric: {name!r} is not a metric of this run; {_metric_choices(has_3d)}")
+            raise ExplainOptionError(f"--metric: {name!r} is not a metric of this run; {_metric_choices(has_3d)}")
     return chosen
 
 
@@ -414,7 +420,7 @@ def run_tasks(tasks: list[CoalitionTask], engine: str, workers: int | None, addr
     from tqdm import tqdm
 
     if engine not in ENGINES:
-        raise ExplainError(f"--engine {engine!r}: choose local or ray")
+        raise ExplainOptionError(f"--engine {engine!r}: choose local or ray")
     finished = map_on(engine, evaluate_coalition, tasks, workers, address, inline_one=True)
     return list(tqdm(finished, total=len(tasks), desc="explain", unit="run", disable=not progress))
 
