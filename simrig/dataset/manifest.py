@@ -15,7 +15,6 @@ import hashlib
 import json
 import platform
 import re
-from importlib import metadata
 from pathlib import Path
 
 from simrig.scenarios import MAX_FRAMES
@@ -56,6 +55,8 @@ def folder_digest(folder: Path) -> dict:
 
 def package_versions() -> dict[str, str]:
     """Versions of the packages that shape a dataset's bytes (and Python's)."""
+    from importlib import metadata  # writing a manifest needs it, reading one does not
+
     versions = {"python": platform.python_version()}
     for name in _VERSIONED_PACKAGES:
         if name == "simrig":  # this package's own version, whatever its distribution is called

@@ -47,12 +47,12 @@ import pyarrow as pa
 from simrig.dataset import Dataset
 from simrig.dataset.ground_truth import GroundTruth
 from simrig.dataset.tracks_file import TrackRows
-from simrig.scenarios.schema import TrafficConfig, scenario_from_record
 from simrig.seeding import RandomStreams, stream_generator
 
 from .inputs import in_class_range
 
 if TYPE_CHECKING:
+    from simrig.scenarios.schema import TrafficConfig
     from simrig.world.ego_planner import EgoPlan
 
 ACTION_NOISE_MPS2 = 1.0
@@ -162,6 +162,8 @@ def planner_road_of(dataset: Dataset) -> PlanningRoad | None:
     """The planning road of ``dataset``; None for a dataset simrig did not simulate (an imported one)."""
     if dataset.source is not None:
         return None
+    from simrig.scenarios.schema import scenario_from_record  # a simulated dataset's scenario, validated again
+
     scenario = scenario_from_record(dataset.scenario, f"dataset {dataset.path}")
     return PlanningRoad(scenario.traffic, scenario.frame_rate_hz, dataset.seed)
 
