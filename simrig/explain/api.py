@@ -269,8 +269,8 @@ def play(dataset: Dataset, record: dict, players: tuple[str, ...], chosen: dict[
     orders of a round start with those of the round before, so ``--samples N`` reproduces a game that stopped
     at N. ``exact``: every coalition, whatever the number of groups."""
     if tolerance is not None and not 0 < tolerance <= 1:
-        raise ExplainOptionError(f"--tolerance: a fraction in (0, 1] of each metric's scale, got {tolerance:g} "
-                                 "(to sample a fixed number of permutations, give --samples alone)")
+        raise ExplainOptionError(f"--tolerance: a fraction in (0, 1] of each metric's scale, got {tolerance:g}; "
+                                 "to sample a fixed number of permutations, give --samples alone")
     if tolerance is not None and samples is not None and samples < FIRST_ROUND:
         raise ExplainOptionError(f"--tolerance needs --samples {FIRST_ROUND} or more (three antithetic pairs), "
                                  f"got {samples}")
@@ -409,8 +409,8 @@ def _metric_choices(has_3d: bool) -> str:
     two_d = ", ".join(METRICS_2D)
     if not has_3d:
         return f"its tracker has no 3D tracks, so choose a 2D metric: {two_d}"
-    return (f"3D: {', '.join(EXPLAINABLE_3D)}; 2D: {two_d} (a bare name is the 3D metric where both have it; 2d:NAME "
-            "or 3d:NAME picks the dimension)")
+    return (f"3D: {', '.join(EXPLAINABLE_3D)}; 2D: {two_d}; a bare name is the 3D metric where both have it, 2d:NAME "
+            "or 3d:NAME picks the dimension")
 
 
 def run_tasks(tasks: list[CoalitionTask], engine: str, workers: int | None, address: str | None,
