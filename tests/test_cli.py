@@ -50,7 +50,7 @@ def test_negative_frame_count_is_one_line(tmp_path, capsys):
         main(["generate", "highway_surround6", "--frames", "-3", "--out", str(tmp_path / "d")])
     assert raised.value.code == 2
     err = _error_line(capsys)
-    assert "argument --frames: must be at least 1, got -3" in err
+    assert "simrig: error: --frames: must be at least 1, got -3" in err
 
 
 def test_complete_output_folder_is_one_line(tmp_path, capsys):

@@ -263,7 +263,7 @@ def test_no_sequences_is_refused_by_the_parser(tmp_path, capsys):
     with pytest.raises(SystemExit) as stop:
         main(["generate", "--space", str(_space(tmp_path)), "--count", "0", "--out", str(tmp_path / "out")])
     assert stop.value.code == 2
-    assert "argument --count: must be at least 1, got 0" in capsys.readouterr().err
+    assert "simrig: error: --count: must be at least 1, got 0" in capsys.readouterr().err
     with pytest.raises(SearchError, match=r"--count 0: must be a whole number of sequences from 1"):
         generate_collection(_space(tmp_path), count=0, out=tmp_path / "out")
     assert not (tmp_path / "out").exists()

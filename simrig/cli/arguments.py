@@ -37,6 +37,8 @@ class OneLineParser(argparse.ArgumentParser):
     """argparse, but a usage error is one line naming the argument (``--help`` still shows the usage)."""
 
     def error(self, message: str):
+        if message.startswith("argument "):  # argparse's "argument --frames: ..." in simrig's "--frames: ..." form
+            message = message[len("argument "):]
         self.exit(2, f"simrig: error: {message} (see '{self.prog} --help')\n")
 
 
