@@ -77,6 +77,19 @@ def publish(lines: list[str], out: Path) -> None:
     print(f"wrote {out}")
 
 
+def alternating(sides: dict[str, list[str]], repeats: int, measure) -> tuple[dict[str, list[float]], dict[str, str]]:
+    """Run every side's command ``repeats`` times, the sides alternating (so that a busy moment of the machine hits
+    every side alike); ``measure(command)`` gives (a cost, the command's stdout). Returns each side's costs and its
+    last stdout."""
+    costs: dict[str, list[float]] = {name: [] for name in sides}
+    outputs: dict[str, str] = {}
+    for _ in range(repeats):
+        for name, command in sides.items():
+            cost, outputs[name] = measure(command)
+            costs[name].append(cost)
+    return costs, outputs
+
+
 def seed_range(text: str) -> list[int]:
     """The seeds of a ``--seeds`` option: ``100-109`` (inclusive) or one seed.
 

@@ -33,7 +33,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from published import publish  # tests/perf helpers
+from published import alternating, publish  # tests/perf helpers
 
 TESTS = Path(__file__).resolve().parents[1]
 REPORT = TESTS.parent / "reports" / "perf" / "score_first_call.md"
@@ -78,13 +78,7 @@ def main() -> None:
         "simrig.score() (Python)": [sys.executable, "-c", front_door],
         "TrackEval (Python)": [sys.executable, "-c", peer],
     }
-    first: dict[str, list[float]] = {name: [] for name in sides}
-    outputs: dict[str, str] = {}
-    for _ in range(args.repeats):  # alternating, so that a busy moment of the machine hits every side alike
-        for name, command in sides.items():
-            wall, out = _wall(command, root)
-            first[name].append(wall)
-            outputs[name] = out
+    first, outputs = alternating(sides, args.repeats, lambda command: _wall(command, root))
 
     ours = json.loads(outputs["simrig.score() (Python)"].strip().splitlines()[-1])
     theirs = json.loads(outputs["TrackEval (Python)"].strip().splitlines()[-1])

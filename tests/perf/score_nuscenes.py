@@ -28,7 +28,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from published import command_line, machine, publish  # tests/perf helpers
+from published import alternating, command_line, machine, publish  # tests/perf helpers
 
 TESTS = Path(__file__).resolve().parents[1]
 REPORT = TESTS.parent / "reports" / "perf" / "score_nuscenes.md"
@@ -72,13 +72,7 @@ def main() -> None:
                                   str(results), str(root / "devkit")],
         "simrig.score()": [sys.executable, "-c", ours],
     }
-    first: dict[str, list[float]] = {name: [] for name in sides}
-    outputs: dict[str, str] = {}
-    for _ in range(args.repeats):  # alternating, so that a busy moment of the machine hits both sides alike
-        for name, command in sides.items():
-            cpu, out = _cpu(command, root)
-            first[name].append(cpu)
-            outputs[name] = out
+    first, outputs = alternating(sides, args.repeats, lambda command: _cpu(command, root))
     devkit = json.loads(outputs["nuScenes devkit 1.2.0"].strip().splitlines()[-1])
     simrig_metrics = json.loads(outputs["simrig.score()"].strip().splitlines()[-1])
     difference = max(abs(float(simrig_metrics[name]) - float(devkit[name.lower()])) for name in COMPARED)
